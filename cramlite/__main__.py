@@ -1,0 +1,5 @@
+import sys
+
+from cramlite.cli import main
+
+sys.exit(main())

@@ -1,0 +1,111 @@
+"""Handles on bodies inside one PyBullet client: the robot and the items.
+
+Every call passes the owning world's client id, so two worlds never share state.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from cramlite.world.bullet import p
+from cramlite.world.setup import ItemSpec
+
+Vec3 = tuple[float, float, float]
+Quat = tuple[float, float, float, float]
+
+
+def yaw_quat(yaw: float) -> Quat:
+    return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+
+
+def quat_yaw(q: Quat) -> float:
+    x, y, z, w = q
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+@dataclass
+class WorldObject:
+    """An item in a world. Its frame is the centre of its bottom face (see worlds/items)."""
+
+    name: str
+    type: str
+    body: int
+    client: int
+    spec: ItemSpec | None = None
+    _inertial: tuple[Vec3, Quat] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+
+    def __post_init__(self) -> None:
+        info = p.getDynamicsInfo(self.body, -1, physicsClientId=self.client)
+        self._inertial = (tuple(info[3]), tuple(info[4]))
+
+    def pose(self) -> tuple[Vec3, Quat]:
+        """Position and orientation of the item's frame (PyBullet reports the COM frame)."""
+        com_pos, com_orn = p.getBasePositionAndOrientation(self.body, physicsClientId=self.client)
+        inv_pos, inv_orn = p.invertTransform(*self._inertial)
+        pos, orn = p.multiplyTransforms(com_pos, com_orn, inv_pos, inv_orn)
+        return tuple(pos), tuple(orn)
+
+    def position(self) -> Vec3:
+        return self.pose()[0]
+
+    def set_pose(self, position: Vec3, orientation: Quat = (0.0, 0.0, 0.0, 1.0)) -> None:
+        pos, orn = p.multiplyTransforms(position, orientation, *self._inertial)
+        p.resetBasePositionAndOrientation(self.body, pos, orn, physicsClientId=self.client)
+        p.resetBaseVelocity(self.body, (0, 0, 0), (0, 0, 0), physicsClientId=self.client)
+
+    def aabb(self) -> tuple[Vec3, Vec3]:
+        lo, hi = p.getAABB(self.body, -1, physicsClientId=self.client)
+        return tuple(lo), tuple(hi)
+
+    def height(self) -> float:
+        lo, hi = self.aabb()
+        return hi[2] - lo[2]
+
+
+class RobotBody:
+    """The PR2 in a PyBullet client: base pose, joints and links by name."""
+
+    def __init__(self, body: int, client: int):
+        self.body = body
+        self.client = client
+        self.joint_index: dict[str, int] = {}
+        self.link_index: dict[str, int] = {}
+        self.joint_limits: dict[str, tuple[float, float]] = {}
+        for j in range(p.getNumJoints(body, physicsClientId=client)):
+            info = p.getJointInfo(body, j, physicsClientId=client)
+            self.link_index[info[12].decode()] = j
+            if info[2] != p.JOINT_FIXED:
+                name = info[1].decode()
+                self.joint_index[name] = j
+                self.joint_limits[name] = (info[8], info[9])
+        base_name = p.getBodyInfo(body, physicsClientId=client)[0].decode()
+        self.link_index[base_name] = -1
+
+    def set_base_pose(self, x: float, y: float, yaw: float) -> None:
+        p.resetBasePositionAndOrientation(self.body, (x, y, 0.0), yaw_quat(yaw),
+                                          physicsClientId=self.client)
+
+    def base_pose(self) -> tuple[float, float, float]:
+        pos, orn = p.getBasePositionAndOrientation(self.body, physicsClientId=self.client)
+        return pos[0], pos[1], quat_yaw(orn)
+
+    def set_joint_positions(self, positions: dict[str, float]) -> None:
+        for name, value in positions.items():
+            p.resetJointState(self.body, self.joint_index[name], value,
+                              physicsClientId=self.client)
+
+    def joint_positions(self, names: list[str] | None = None) -> dict[str, float]:
+        names = list(self.joint_index) if names is None else names
+        states = p.getJointStates(self.body, [self.joint_index[n] for n in names],
+                                  physicsClientId=self.client)
+        return {n: s[0] for n, s in zip(names, states, strict=True)}
+
+    def link_pose(self, link: str) -> tuple[Vec3, Quat]:
+        index = self.link_index[link]
+        if index == -1:
+            pos, orn = p.getBasePositionAndOrientation(self.body, physicsClientId=self.client)
+            return tuple(pos), tuple(orn)
+        state = p.getLinkState(self.body, index, computeForwardKinematics=True,
+                               physicsClientId=self.client)
+        return tuple(state[4]), tuple(state[5])

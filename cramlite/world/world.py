@@ -1,0 +1,229 @@
+"""The `World`: one PyBullet client with a kitchen, the PR2 and items.
+
+A world owns its client (DIRECT by default, GUI on request) and is closed with it;
+nothing is kept at module level, so any number of worlds can live in one process.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from cramlite.errors import SetupError
+from cramlite.world.bodies import RobotBody, Vec3, WorldObject, yaw_quat
+from cramlite.world.bullet import p
+from cramlite.world.pr2 import pr2_urdf_path
+from cramlite.world.quiet import c_stdout_silenced
+from cramlite.world.setup import Setup
+
+TIME_STEP_S = 1.0 / 240.0
+GRAVITY = -9.81
+#: Penetration deeper than this between an item and another body is "inside" it.
+PENETRATION_TOLERANCE_M = 0.005
+#: An item must start within this height of its surface's top.
+SURFACE_HEIGHT_TOLERANCE_M = 0.01
+
+
+@dataclass(frozen=True)
+class Surface:
+    """A horizontal support (a link of the world URDF): its top and its xy extent."""
+
+    name: str
+    x_min: float
+    x_max: float
+    y_min: float
+    y_max: float
+    top_z: float
+
+    def contains_xy(self, x: float, y: float, margin: float = 0.0) -> bool:
+        return (self.x_min + margin <= x <= self.x_max - margin
+                and self.y_min + margin <= y <= self.y_max - margin)
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """Poses of everything a plan changes, to reset a world cheaply between trials."""
+
+    base: tuple[float, float, float]
+    joints: dict[str, float]
+    objects: dict[str, tuple[Vec3, tuple[float, float, float, float]]]
+
+
+class World:
+    """A PyBullet world. Use as a context manager or call `close()`."""
+
+    def __init__(self, gui: bool = False):
+        with c_stdout_silenced():
+            self.client = p.connect(p.GUI if gui else p.DIRECT)
+        if self.client < 0:
+            raise RuntimeError("PyBullet could not connect (a GUI needs a display)")
+        self.gui = gui
+        p.setGravity(0, 0, GRAVITY, physicsClientId=self.client)
+        p.setTimeStep(TIME_STEP_S, physicsClientId=self.client)
+        self.environment: int | None = None
+        self.environment_links: dict[str, int] = {}
+        self.robot: RobotBody | None = None
+        self.objects: dict[str, WorldObject] = {}
+        self.setup: Setup | None = None
+
+    # -- lifetime -------------------------------------------------------------------
+    def close(self) -> None:
+        if self.client is not None and self.client >= 0:
+            p.disconnect(physicsClientId=self.client)
+            self.client = -1
+
+    def __enter__(self) -> World:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    # -- loading --------------------------------------------------------------------
+    @classmethod
+    def from_setup(cls, setup: Setup, gui: bool = False) -> World:
+        """A new world with the setup's environment, the PR2 at its start and the items."""
+        world = cls(gui=gui)
+        try:
+            world.load_setup(setup)
+        except BaseException:
+            world.close()
+            raise
+        return world
+
+    def load_setup(self, setup: Setup) -> None:
+        self.setup = setup
+        self.load_environment(setup.world_urdf)
+        self.load_robot()
+        self.robot.set_base_pose(setup.robot_start.x, setup.robot_start.y, setup.robot_start.yaw)
+        for spec in setup.items:
+            obj = self.add_object(spec.name, spec.type, spec.urdf)
+            obj.spec = spec
+            obj.set_pose(spec.pose.xyz, yaw_quat(spec.pose.yaw))
+        self.check_setup_geometry(setup)
+
+    def _load_urdf(self, path: Path, fixed: bool) -> int:
+        with c_stdout_silenced():
+            body = p.loadURDF(str(path), useFixedBase=fixed, physicsClientId=self.client)
+        if body < 0:
+            raise SetupError("PyBullet could not load this URDF", source=str(path))
+        return body
+
+    def load_environment(self, urdf: Path) -> None:
+        self.environment = self._load_urdf(urdf, fixed=True)
+        base = p.getBodyInfo(self.environment, physicsClientId=self.client)[0].decode()
+        self.environment_links = {base: -1}
+        for j in range(p.getNumJoints(self.environment, physicsClientId=self.client)):
+            info = p.getJointInfo(self.environment, j, physicsClientId=self.client)
+            self.environment_links[info[12].decode()] = j
+
+    def load_robot(self) -> RobotBody:
+        body = self._load_urdf(pr2_urdf_path(), fixed=True)
+        self.robot = RobotBody(body, self.client)
+        return self.robot
+
+    def add_object(self, name: str, type_: str, urdf: Path) -> WorldObject:
+        body = self._load_urdf(urdf, fixed=False)
+        obj = WorldObject(name=name, type=type_, body=body, client=self.client)
+        self.objects[name] = obj
+        return obj
+
+    # -- queries --------------------------------------------------------------------
+    def surface(self, name: str) -> Surface:
+        if name not in self.environment_links:
+            raise KeyError(name)
+        lo, hi = self.link_bounds(self.environment_links[name])
+        return Surface(name, lo[0], hi[0], lo[1], hi[1], hi[2])
+
+    def link_bounds(self, index: int) -> tuple[Vec3, Vec3]:
+        """Exact bounds of an environment link: its box geometry where it is a box
+        (PyBullet's AABB is inflated by the collision margin), else the AABB."""
+        shapes = p.getCollisionShapeData(self.environment, index, physicsClientId=self.client)
+        if len(shapes) == 1 and shapes[0][2] == p.GEOM_BOX:
+            if index == -1:
+                pos, orn = p.getBasePositionAndOrientation(self.environment,
+                                                           physicsClientId=self.client)
+            else:
+                state = p.getLinkState(self.environment, index, physicsClientId=self.client)
+                pos, orn = state[4], state[5]
+            centre, _ = p.multiplyTransforms(pos, orn, shapes[0][5], shapes[0][6])
+            half = [d / 2 for d in shapes[0][3]]
+            return (tuple(c - h for c, h in zip(centre, half, strict=True)),
+                    tuple(c + h for c, h in zip(centre, half, strict=True)))
+        lo, hi = p.getAABB(self.environment, index, physicsClientId=self.client)
+        return tuple(lo), tuple(hi)
+
+    def environment_boxes(self) -> list[tuple[str, Vec3, Vec3]]:
+        """Axis-aligned bounds of every environment link (for 2D maps of fixed geometry)."""
+        out = []
+        for name, index in self.environment_links.items():
+            if not p.getCollisionShapeData(self.environment, index, physicsClientId=self.client):
+                continue
+            lo, hi = self.link_bounds(index)
+            out.append((name, lo, hi))
+        return out
+
+    def penetration(self, body_a: int, body_b: int, link_b: int | None = None) -> float:
+        """Deepest penetration (m, >= 0) between two bodies; 0 when they do not overlap."""
+        kwargs = {} if link_b is None else {"linkIndexB": link_b}
+        points = p.getClosestPoints(body_a, body_b, 0.0, physicsClientId=self.client, **kwargs)
+        return max((-pt[8] for pt in points if pt[8] < 0), default=0.0)
+
+    def body_name(self, body: int) -> str:
+        if body == self.environment:
+            return "the environment"
+        if self.robot is not None and body == self.robot.body:
+            return "the robot"
+        for obj in self.objects.values():
+            if obj.body == body:
+                return repr(obj.name)
+        return f"body {body}"
+
+    def check_setup_geometry(self, setup: Setup) -> None:
+        """Every item stands on its surface and starts inside nothing else."""
+        src = str(setup.source)
+        surfaces = [n for n in self.environment_links if n != "floor"]
+        for i, spec in enumerate(setup.items):
+            where = f"items[{i}]"
+            if spec.surface not in self.environment_links:
+                raise SetupError(f"unknown surface {spec.surface!r}; expected one of "
+                                 f"{', '.join(surfaces)}", source=src, field=f"{where}.surface")
+            surf = self.surface(spec.surface)
+            if (not surf.contains_xy(spec.pose.x, spec.pose.y)
+                    or abs(spec.pose.z - surf.top_z) > SURFACE_HEIGHT_TOLERANCE_M):
+                raise SetupError(
+                    f"item {spec.name!r} at {list(spec.pose.xyz)} is not on {spec.surface!r}; "
+                    f"expected x in [{surf.x_min:.2f}, {surf.x_max:.2f}], y in "
+                    f"[{surf.y_min:.2f}, {surf.y_max:.2f}], z = {surf.top_z:.2f}",
+                    source=src, field=f"{where}.pose")
+        p.performCollisionDetection(physicsClientId=self.client)
+        bodies = [self.environment, self.robot.body, *(o.body for o in self.objects.values())]
+        for i, spec in enumerate(setup.items):
+            obj = self.objects[spec.name]
+            for other in bodies:
+                if other == obj.body:
+                    continue
+                depth = self.penetration(obj.body, other)
+                if depth > PENETRATION_TOLERANCE_M:
+                    raise SetupError(
+                        f"item {spec.name!r} starts inside {self.body_name(other)} "
+                        f"(overlap {depth * 100:.1f} cm); expected a free spot",
+                        source=src, field=f"items[{i}].pose")
+
+    # -- simulation -----------------------------------------------------------------
+    def step(self, seconds: float) -> None:
+        for _ in range(max(1, round(seconds / TIME_STEP_S))):
+            p.stepSimulation(physicsClientId=self.client)
+
+    def snapshot(self) -> Snapshot:
+        base = self.robot.base_pose() if self.robot else (0.0, 0.0, 0.0)
+        joints = self.robot.joint_positions() if self.robot else {}
+        objects = {name: obj.pose() for name, obj in self.objects.items()}
+        return Snapshot(base=base, joints=joints, objects=objects)
+
+    def restore(self, snap: Snapshot) -> None:
+        if self.robot:
+            self.robot.set_base_pose(*snap.base)
+            self.robot.set_joint_positions(snap.joints)
+        for name, (pos, orn) in snap.objects.items():
+            self.objects[name].set_pose(pos, orn)
