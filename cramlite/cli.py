@@ -28,6 +28,34 @@ def cmd_show(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_strategies(args: argparse.Namespace) -> int:
+    from cramlite.strategies import available_strategies
+
+    listing = available_strategies()
+    width = max(map(len, listing))
+    for name, summary in listing.items():
+        print(f"{name:<{width}}  {summary}")
+    return EXIT_OK
+
+
+def cmd_order(args: argparse.Namespace) -> int:
+    import json
+
+    from cramlite.strategies.service import answer_text
+
+    if args.request == "-":
+        text, source = sys.stdin.read(), "<stdin>"
+    else:
+        try:
+            with open(args.request, encoding="utf-8") as handle:
+                text, source = handle.read(), args.request
+        except OSError as exc:
+            raise UserInputError(f"cannot read request ({exc.strerror})",
+                                 source=args.request) from None
+    print(json.dumps(answer_text(text, source)))
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="cramlite", description="A lightweight, ROS-free robot plan executive.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -38,6 +66,18 @@ def build_parser() -> argparse.ArgumentParser:
     show.add_argument("--width", type=int, default=1024, help="image width in pixels")
     show.add_argument("--height", type=int, default=768, help="image height in pixels")
     show.set_defaults(func=cmd_show)
+
+    strategies = sub.add_parser("strategies", help="list the ordering strategies by name")
+    strategies.set_defaults(func=cmd_strategies)
+
+    order = sub.add_parser(
+        "order", help="answer one JSON ordering request (the OPM service without ROS)",
+        description="Reads {\"robot\": [x,y,z], \"items\": [{\"name\", \"position\", "
+                    "\"k\"|\"category\", \"c\"|\"contained\"}], \"strategy\", \"params\", "
+                    "\"dims\", \"form\", \"seed\", \"then_at\"} and prints "
+                    "{\"next\", \"costs\", \"order\"}.")
+    order.add_argument("request", nargs="?", default="-", help="JSON file, or - for stdin")
+    order.set_defaults(func=cmd_order)
     return parser
 
 

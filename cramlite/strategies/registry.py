@@ -1,0 +1,62 @@
+"""Finding strategies by name: built-ins, plugins (entry points), `module:Class` paths.
+
+Third-party packages register a `Strategy` subclass under the entry-point group
+`cramlite.strategies`, e.g. in their pyproject.toml:
+
+    [project.entry-points."cramlite.strategies"]
+    my-order = "my_package.order:MyStrategy"
+"""
+
+from __future__ import annotations
+
+import importlib
+from importlib.metadata import entry_points
+from typing import Any
+
+from cramlite.strategies.base import Strategy, StrategyError
+from cramlite.strategies.opm import NearestStrategy, OPMStrategy, OPMTwoStepStrategy
+from cramlite.strategies.optimal import OptimalStrategy
+from cramlite.strategies.simple import BaselineStrategy, RandomStrategy
+
+ENTRY_POINT_GROUP = "cramlite.strategies"
+BUILTIN: dict[str, type[Strategy]] = {cls.name: cls for cls in (
+    OPMStrategy, BaselineStrategy, RandomStrategy, NearestStrategy, OPMTwoStepStrategy,
+    OptimalStrategy)}
+
+
+def plugin_entry_points() -> dict[str, Any]:
+    return {ep.name: ep for ep in entry_points(group=ENTRY_POINT_GROUP)}
+
+
+def available_strategies() -> dict[str, str]:
+    """Name -> one-line summary of every strategy that can be named (built-in or plugin)."""
+    out = {name: cls.summary for name, cls in BUILTIN.items()}
+    for name, ep in plugin_entry_points().items():
+        out.setdefault(name, f"plugin {ep.value}")
+    return out
+
+
+def strategy_class(name: str) -> type[Strategy]:
+    """Resolve a strategy name, an entry-point name, or `package.module:Class`."""
+    if name in BUILTIN:
+        return BUILTIN[name]
+    plugins = plugin_entry_points()
+    try:
+        if name in plugins:
+            cls = plugins[name].load()
+        elif ":" in name:
+            module_name, _, attr = name.partition(":")
+            cls = getattr(importlib.import_module(module_name), attr)
+        else:
+            raise StrategyError(f"unknown strategy {name!r}; expected one of "
+                                f"{', '.join(available_strategies())} or package.module:Class")
+    except (ImportError, AttributeError) as exc:
+        raise StrategyError(f"cannot load strategy {name!r}: {exc}") from None
+    if not (isinstance(cls, type) and issubclass(cls, Strategy)):
+        raise StrategyError(f"strategy {name!r} is not a cramlite.strategies.Strategy subclass")
+    return cls
+
+
+def make_strategy(name: str, **kwargs: Any) -> Strategy:
+    """A fresh strategy instance (one per episode or trial)."""
+    return strategy_class(name)(**kwargs)
