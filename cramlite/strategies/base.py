@@ -34,6 +34,8 @@ class Strategy(ABC):
     summary: ClassVar[str] = ""
     #: True when the choice depends only on (remaining, agent): `tied` is then exact.
     memoryless: ClassVar[bool] = True
+    #: False when OPM parameters (k, c) do not change the choice (fits skip the grid).
+    uses_params: ClassVar[bool] = True
 
     def __init__(self, params: Mapping[str, float] | None = None, *, dims: str = "xy",
                  form: str = "power",
@@ -52,6 +54,8 @@ class Strategy(ABC):
             raise StrategyError(str(exc)) from None
         self.rng = as_generator(rng)
         self.options = options
+        #: How many choices were made at random among more than one option.
+        self.random_picks = 0
 
     # -- episode lifecycle ---------------------------------------------------------------
     def reset(self, candidates: Sequence[Candidate] = (),
@@ -75,7 +79,10 @@ class Strategy(ABC):
         return None
 
     def _pick(self, tied: Sequence[Candidate]) -> Candidate:
-        return tied[0] if len(tied) == 1 else tied[int(self.rng.integers(len(tied)))]
+        if len(tied) == 1:
+            return tied[0]
+        self.random_picks += 1
+        return tied[int(self.rng.integers(len(tied)))]
 
     def _ensure_weights(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> None:
         if self._span_weights and self.model.axis_weights is None:

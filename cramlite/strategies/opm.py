@@ -57,6 +57,7 @@ class OPMStrategy(Strategy):
 
 class NearestStrategy(OPMStrategy):
     name = "nearest"
+    uses_params = False
     summary = "plain distance: the OPM with k = c = 1"
 
     def kc(self, candidate: Candidate) -> tuple[float, float]:

@@ -83,6 +83,8 @@ class OptimalStrategy(OPMStrategy):
             parent[new_masks[better], nxt[better]] = best_last[better]
         final = dp[full - 1]
         ends = np.flatnonzero(final == final.min())
+        if len(ends) > 1:
+            self.random_picks += 1
         last = int(ends[0] if len(ends) == 1 else ends[self.rng.integers(len(ends))])
         order, mask = [], full - 1
         while last >= 0:

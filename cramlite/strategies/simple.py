@@ -15,6 +15,7 @@ class BaselineStrategy(Strategy):
     """
 
     name = "baseline"
+    uses_params = False
     summary = "the fixed order given by the task (setup file's baseline_order)"
 
     def choose(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> Candidate:
@@ -27,6 +28,7 @@ class BaselineStrategy(Strategy):
 
 class RandomStrategy(Strategy):
     name = "random"
+    uses_params = False
     summary = "a seeded random permutation (uniform over the remaining items)"
 
     def tied(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> list[Candidate]:
