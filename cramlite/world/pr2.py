@@ -118,3 +118,18 @@ class JointMap:
             else:
                 out[name] = float(q[i])
         return out
+
+
+#: Arms tucked for driving (PyCRAM's PR2 park pose), by arm.
+PARK_JOINTS: dict[str, dict[str, float]] = {
+    "right": {"r_shoulder_pan_joint": -1.712, "r_shoulder_lift_joint": -0.256,
+              "r_upper_arm_roll_joint": -1.463, "r_elbow_flex_joint": -2.12,
+              "r_forearm_roll_joint": 1.766, "r_wrist_flex_joint": -0.07,
+              "r_wrist_roll_joint": 0.051},
+    "left": {"l_shoulder_pan_joint": 1.712, "l_shoulder_lift_joint": -0.264,
+             "l_upper_arm_roll_joint": 1.38, "l_elbow_flex_joint": -2.12,
+             "l_forearm_roll_joint": 0.41, "l_wrist_flex_joint": -0.073,
+             "l_wrist_roll_joint": 0.0},
+}
+#: Torso height for table setting (metres; the joint's range is 0 to 0.31).
+TORSO_UP_M = 0.25

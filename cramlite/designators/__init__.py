@@ -1,0 +1,43 @@
+"""Designators (object, location, action, motion), process modules and the plan language."""
+
+from cramlite.designators.actions import (
+    MoveTorsoAction,
+    NavigateAction,
+    ParkArmsAction,
+    PickUpAction,
+    PlaceAction,
+    TransportAction,
+)
+from cramlite.designators.context import ExecutionOptions, RobotContext, simulated_robot
+from cramlite.designators.failures import (
+    GraspFailed,
+    IKFailed,
+    NavigationFailed,
+    NoPathFound,
+    ObjectNotFound,
+    ObjectUnreachable,
+    PlacementFailed,
+    PlanFailure,
+)
+from cramlite.designators.language import Sequential, TryInOrder
+from cramlite.designators.locations import CostmapLocation, PlacingLocation, ReachablePose
+from cramlite.designators.motions import (
+    AttachMotion,
+    DetachMotion,
+    MoveArmJointsMotion,
+    MoveGripperMotion,
+    MoveMotion,
+    MoveTorsoMotion,
+)
+from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription
+from cramlite.designators.process_modules import ProcessModules, SimulatedProcessModules
+
+__all__ = [
+    "AttachMotion", "CostmapLocation", "DetachMotion", "ExecutionOptions", "GraspFailed",
+    "IKFailed", "MoveArmJointsMotion", "MoveGripperMotion", "MoveMotion", "MoveTorsoAction",
+    "MoveTorsoMotion", "NavigateAction", "NavigationFailed", "NoPathFound", "ObjectDesignator",
+    "ObjectDesignatorDescription", "ObjectNotFound", "ObjectUnreachable", "ParkArmsAction",
+    "PickUpAction", "PlaceAction", "PlacementFailed", "PlacingLocation", "PlanFailure",
+    "ProcessModules", "ReachablePose", "RobotContext", "Sequential", "SimulatedProcessModules",
+    "TransportAction", "TryInOrder", "simulated_robot",
+]

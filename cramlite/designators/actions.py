@@ -1,0 +1,306 @@
+"""Action designators: what to do, resolved into motions at run time.
+
+Missing parameters (arm, grasp, base pose, place pose) are resolved from location
+designators. Unlike PyCRAM, a failing candidate is not the end: `TransportAction` goes
+on to the designator's next candidate (next base pose, other arm, other grasp, next
+placement) up to `ExecutionOptions.max_candidates`, and the failure that finally escapes
+lists what was tried.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from cramlite.designators.context import Holding, RobotContext
+from cramlite.designators.failures import (
+    GraspFailed,
+    NavigationFailed,
+    ObjectUnreachable,
+    PlacementFailed,
+    PlanFailure,
+)
+from cramlite.designators.grasps import (
+    LIFT_M,
+    grasp_height_m,
+    grasps_for,
+    in_base_frame,
+    tool_pose,
+)
+from cramlite.designators.locations import CostmapLocation, PlacingLocation, ReachablePose
+from cramlite.designators.motions import (
+    AttachMotion,
+    DetachMotion,
+    MoveArmJointsMotion,
+    MoveGripperMotion,
+    MoveMotion,
+    MoveTorsoMotion,
+)
+from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription, as_object
+from cramlite.motion.ik import ARMS, arm_ik, tool_frame
+from cramlite.world.bodies import quat_yaw
+from cramlite.world.pr2 import PARK_JOINTS
+
+BasePose = tuple[float, float, float]
+Vec3 = tuple[float, float, float]
+GRASP_CHECK_M = 0.03
+RESTING_HEIGHT_TOLERANCE_M = 0.01
+
+
+@dataclass
+class ParkArmsAction:
+    """Tuck the arms for driving (carried objects stay in hand)."""
+
+    arm: str = "both"  #: "left", "right" or "both"
+
+    def perform(self, ctx: RobotContext) -> None:
+        arms = ARMS if self.arm == "both" else (self.arm,)
+        joints = {k: v for a in arms for k, v in PARK_JOINTS[a].items()}
+        MoveArmJointsMotion(joints).perform(ctx)
+        update_carried(ctx)
+
+
+@dataclass
+class MoveTorsoAction:
+    height_m: float  #: torso lift in metres (0 to 0.31 on the PR2)
+
+    def perform(self, ctx: RobotContext) -> None:
+        MoveTorsoMotion(self.height_m).perform(ctx)
+
+
+@dataclass
+class NavigateAction:
+    """Drive the base to a pose along a collision-free OMPL path."""
+
+    target: BasePose  #: x, y, yaw in the world
+
+    def perform(self, ctx: RobotContext) -> None:
+        start = ctx.modules.base_pose()
+        path = ctx.base_planner.plan(start, self.target, ctx.rng)
+        if path is None:
+            x, y, yaw = self.target
+            raise NavigationFailed(f"no collision-free base path to ({x:.2f}, {y:.2f}, "
+                                   f"{math.degrees(yaw):.0f} deg)")
+        MoveMotion(path.waypoints).perform(ctx)
+
+
+@dataclass
+class PickUpAction:
+    """Grasp an object from where the robot stands and lift it into the park pose."""
+
+    object: ObjectDesignator | ObjectDesignatorDescription | str  #: what to pick up
+    arms: Sequence[str] | None = None  #: arms to try (default both)
+    grasps: Sequence[str] | None = None  #: grasps to try (default by object shape)
+    reach: ReachablePose | None = None  #: precomputed joints from a location designator
+
+    def perform(self, ctx: RobotContext) -> str:
+        obj = as_object(self.object, ctx)
+        if any(h.obj == obj.name for h in ctx.holding.values()):
+            raise GraspFailed("already held", obj=obj.name)
+        reach = self.reach or self._resolve(ctx, obj)
+        if reach.arm in ctx.holding:
+            raise GraspFailed(f"the {reach.arm} hand is not free", obj=obj.name)
+        MoveGripperMotion(reach.arm, "open").perform(ctx)
+        MoveArmJointsMotion(reach.pre_joints).perform(ctx)
+        MoveArmJointsMotion(reach.joints).perform(ctx)
+        (bx, by, bz), _ = obj.pose(ctx)
+        height = obj.height_m(ctx)
+        tool, _ = ctx.world.robot.link_pose(tool_frame(reach.arm))
+        expected = (bx, by, bz + grasp_height_m(reach.grasp, height))
+        if math.dist(tool, expected) > GRASP_CHECK_M:
+            MoveArmJointsMotion(reach.pre_joints).perform(ctx)
+            raise GraspFailed(f"gripper ended {math.dist(tool, expected) * 100:.1f} cm from the "
+                              "grasp point", obj=obj.name)
+        MoveGripperMotion(reach.arm, "close").perform(ctx)
+        AttachMotion(reach.arm, obj.name).perform(ctx)
+        _, orientation = obj.pose(ctx)
+        ctx.holding[reach.arm] = Holding(
+            obj.name, reach.grasp, grasp_height_m(reach.grasp, height),
+            yaw_offset=quat_yaw(orientation) - ctx.modules.base_pose()[2])
+        lift = tool_pose(reach.grasp, (bx, by, bz + LIFT_M), ctx.holding[reach.arm].grasp_height_m,
+                         ctx.modules.base_pose()[2])
+        solution = arm_ik(reach.arm).solve(in_base_frame(lift, ctx.modules.base_pose()), ctx.rng,
+                                           reach.joints)
+        if solution is not None:
+            MoveArmJointsMotion(solution.joints).perform(ctx)
+        ParkArmsAction(reach.arm).perform(ctx)
+        return reach.arm
+
+    def _resolve(self, ctx: RobotContext, obj: ObjectDesignator) -> ReachablePose:
+        (x, y, z), _ = obj.pose(ctx)
+        height = obj.height_m(ctx)
+        base = ctx.modules.base_pose()
+        tried = []
+        for arm in self.arms or [a for a in ARMS if a not in ctx.holding]:
+            for grasp in self.grasps or grasps_for(height):
+                location = CostmapLocation((x, y, z), {grasp: grasp_height_m(grasp, height)},
+                                           [arm], ignore=[obj.name])
+                reach = location.reach_from(ctx, base, arm, grasp)
+                if reach is not None:
+                    return reach
+                tried.append(f"{arm} arm {grasp} grasp")
+        raise ObjectUnreachable("no arm and grasp reaches it from here", obj=obj.name,
+                                tried=tried)
+
+
+@dataclass
+class PlaceAction:
+    """Put a held object down at a position from where the robot stands."""
+
+    object: ObjectDesignator | ObjectDesignatorDescription | str  #: the held object
+    target: Vec3  #: where the object's bottom centre goes
+    reach: ReachablePose | None = None  #: precomputed joints from a location designator
+
+    def perform(self, ctx: RobotContext) -> None:
+        obj = as_object(self.object, ctx)
+        arm = next((a for a, h in ctx.holding.items() if h.obj == obj.name), None)
+        if arm is None:
+            raise PlacementFailed("not held", obj=obj.name)
+        holding = ctx.holding[arm]
+        reach = self.reach or self._resolve(ctx, arm, holding)
+        MoveArmJointsMotion(reach.pre_joints).perform(ctx)
+        MoveArmJointsMotion(reach.joints).perform(ctx)
+        MoveGripperMotion(arm, "open").perform(ctx)
+        DetachMotion(arm, obj.name).perform(ctx)
+        del ctx.holding[arm]
+        MoveArmJointsMotion(reach.pre_joints).perform(ctx)
+        ParkArmsAction(arm).perform(ctx)
+        ctx.modules.settle(ctx.options.settle_s)
+        (x, y, z), _ = obj.pose(ctx)
+        off = math.dist((x, y), self.target[:2])
+        if off > ctx.options.place_tolerance_m or \
+                abs(z - self.target[2]) > RESTING_HEIGHT_TOLERANCE_M:
+            raise PlacementFailed(f"came to rest at ({x:.2f}, {y:.2f}, {z:.2f}), "
+                                  f"{off * 100:.1f} cm from the place pose", obj=obj.name)
+
+    def _resolve(self, ctx: RobotContext, arm: str, holding: Holding) -> ReachablePose:
+        location = CostmapLocation(self.target, {holding.grasp: holding.grasp_height_m}, [arm],
+                                   ignore=[holding.obj])
+        reach = location.reach_from(ctx, ctx.modules.base_pose(), arm, holding.grasp)
+        if reach is None:
+            raise ObjectUnreachable("cannot reach the place pose from here", obj=holding.obj)
+        return reach
+
+
+@dataclass
+class TransportAction:
+    """Fetch an object and put it at a target (or on a surface): navigate, pick up,
+    navigate, place; each step falls through to the next candidate on failure."""
+
+    object: ObjectDesignator | ObjectDesignatorDescription | str  #: what to carry
+    target: Vec3 | None = None  #: where its bottom centre goes (or give `surface`)
+    surface: str | None = None  #: put it on a free spot of this surface instead
+    preferred: Vec3 | None = None  #: with `surface`: spots nearest to this first
+    arms: Sequence[str] | None = None  #: arms to consider (default both)
+    grasps: Sequence[str] | None = None  #: grasps to consider (default by shape)
+
+    def perform(self, ctx: RobotContext) -> None:
+        obj = as_object(self.object, ctx)
+        ParkArmsAction().perform(ctx)
+        (origin, _), picked_from = obj.pose(ctx), self._fetch(ctx, obj)
+        try:
+            self._deliver(ctx, obj)
+        except PlanFailure:
+            self._put_back(ctx, obj, origin, picked_from)
+            raise
+
+    def _fetch(self, ctx: RobotContext, obj: ObjectDesignator) -> ReachablePose:
+        (x, y, z), _ = obj.pose(ctx)
+        height = obj.height_m(ctx)
+        tried: list[str] = []
+        last: PlanFailure | None = None
+        grasps = list(self.grasps or grasps_for(height))
+        arms = [a for a in (self.arms or ARMS) if a not in ctx.holding]
+        location = CostmapLocation((x, y, z), {g: grasp_height_m(g, height) for g in grasps},
+                                   arms, ignore=[obj.name])
+        for attempt, reach in enumerate(location.ground(ctx)):
+            if attempt >= ctx.options.max_candidates:
+                break
+            try:
+                NavigateAction(reach.base).perform(ctx)
+                PickUpAction(obj, reach=reach).perform(ctx)
+                ctx.note(f"picked {obj.name} from {reach.describe()}")
+                return reach
+            except PlanFailure as failure:
+                tried.append(f"{reach.describe()}: {failure.kind}: {failure.reason}")
+                last = failure
+                ParkArmsAction().perform(ctx)
+        rejected = location.describe_rejections()
+        if rejected:
+            tried.append(f"base poses {rejected}")
+        cls = type(last) if last is not None else ObjectUnreachable
+        reason = last.reason if last is not None else \
+            "no base pose from which an arm reaches it"
+        raise cls(reason, obj=obj.name, tried=tried)
+
+    def _deliver(self, ctx: RobotContext, obj: ObjectDesignator) -> None:
+        arm = next(a for a, h in ctx.holding.items() if h.obj == obj.name)
+        holding = ctx.holding[arm]
+        placing = PlacingLocation(obj, target=self.target, surface=self.surface,
+                                  preferred=self.preferred)
+        tried: list[str] = []
+        last: PlanFailure | None = None
+        attempts = 0
+        for spot in placing.ground(ctx):
+            location = CostmapLocation(spot, {holding.grasp: holding.grasp_height_m}, [arm],
+                                       ignore=[obj.name], max_ik_checks=12)
+            for reach in location.ground(ctx):
+                if not placing.is_free(ctx, spot, reach.base[2] + holding.yaw_offset):
+                    continue  # put down from there, it would touch a neighbour
+                attempts += 1
+                try:
+                    NavigateAction(reach.base).perform(ctx)
+                    PlaceAction(obj, spot, reach=reach).perform(ctx)
+                    ctx.note(f"placed {obj.name} at ({spot[0]:.2f}, {spot[1]:.2f}) from "
+                             f"{reach.describe()}")
+                    return
+                except PlanFailure as failure:
+                    tried.append(f"spot ({spot[0]:.2f}, {spot[1]:.2f}) from {reach.describe()}: "
+                                 f"{failure.kind}: {failure.reason}")
+                    last = failure
+                    if isinstance(failure, PlacementFailed):
+                        break  # it is no longer in hand
+                if attempts >= ctx.options.max_candidates:
+                    break
+            if attempts >= ctx.options.max_candidates or obj.name not in \
+                    {h.obj for h in ctx.holding.values()}:
+                break
+            tried.append(f"spot ({spot[0]:.2f}, {spot[1]:.2f}): no reachable base pose")
+            attempts += 1
+            if attempts >= ctx.options.max_candidates:
+                break
+        reason = last.reason if last is not None else "no reachable free place"
+        raise PlacementFailed(reason, obj=obj.name, tried=tried)
+
+    def _put_back(self, ctx: RobotContext, obj: ObjectDesignator, origin: Vec3,
+                  picked_from: ReachablePose) -> None:
+        """After a failed delivery nothing stays in hand: put the object back where it was
+        taken from (from the same base pose), or, if even that fails, let go of it."""
+        if not any(h.obj == obj.name for h in ctx.holding.values()):
+            return
+        try:
+            NavigateAction(picked_from.base).perform(ctx)
+            PlaceAction(obj, origin, reach=picked_from).perform(ctx)
+            ctx.note(f"put {obj.name} back at ({origin[0]:.2f}, {origin[1]:.2f})")
+        except PlanFailure:
+            for arm, holding in list(ctx.holding.items()):
+                if holding.obj == obj.name:
+                    MoveGripperMotion(arm, "open").perform(ctx)
+                    DetachMotion(arm, obj.name).perform(ctx)
+                    del ctx.holding[arm]
+                    ctx.modules.settle(ctx.options.settle_s)
+                    ctx.note(f"let go of {obj.name}")
+        update_carried(ctx)
+
+
+def update_carried(ctx: RobotContext) -> None:
+    """Tell the base planner where carried objects are, in the robot's frame."""
+    points = []
+    x, y, yaw = ctx.modules.base_pose()
+    c, s = math.cos(yaw), math.sin(yaw)
+    for holding in ctx.holding.values():
+        (ox, oy, _), _ = ctx.modules.object_pose(holding.obj)
+        dx, dy = ox - x, oy - y
+        points.append((c * dx + s * dy, -s * dx + c * dy))
+    ctx.checker.set_carried(points)

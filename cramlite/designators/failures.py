@@ -1,0 +1,58 @@
+"""The failure taxonomy of plans: one root, `PlanFailure`, and five kinds.
+
+Each failure carries the object it concerns, the reason, and what was tried before it
+escaped (base poses, arms, grasps, placements), so a user can see why a plan gave up.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+
+class PlanFailure(Exception):
+    """A plan could not achieve something in the world (as opposed to a bug or bad input)."""
+
+    kind = "plan failure"
+
+    def __init__(self, reason: str, obj: str | None = None, tried: Sequence[str] = ()):
+        self.object = obj
+        self.reason = reason
+        self.tried = list(tried)
+        text = f"{obj}: {reason}" if obj else reason
+        if self.tried:
+            text += f" (tried: {'; '.join(self.tried)})"
+        super().__init__(text)
+
+    def as_dict(self) -> dict[str, object]:
+        return {"item": self.object, "type": type(self).__name__, "message": str(self),
+                "tried": self.tried}
+
+
+class ObjectNotFound(PlanFailure):
+    kind = "object not found"
+
+
+class ObjectUnreachable(PlanFailure):
+    """No arm, grasp and base pose reaches the object (IK failed everywhere)."""
+
+    kind = "object unreachable"
+
+
+IKFailed = ObjectUnreachable
+
+
+class NavigationFailed(PlanFailure):
+    """No collision-free base path to the goal."""
+
+    kind = "navigation failed"
+
+
+NoPathFound = NavigationFailed
+
+
+class GraspFailed(PlanFailure):
+    kind = "grasp failed"
+
+
+class PlacementFailed(PlanFailure):
+    kind = "placement failed"

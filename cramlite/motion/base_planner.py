@@ -1,0 +1,119 @@
+"""Base paths with OMPL: SE(2) RRTConnect, simplified and interpolated.
+
+States are checked with a `FootprintChecker` (the fixed world in 2D). A straight
+line that is free is used as it is, without sampling. Each query reseeds OMPL's random
+source from the caller's generator, so the same trial seed gives the same path even in
+a worker process that has planned before (OMPL logs an error on reseeding, which is
+silenced; the reseed does take effect).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from ompl import base as ob
+from ompl import geometric as og
+from ompl import util as ou
+
+from cramlite.motion.footprint import FootprintChecker
+
+BasePose = tuple[float, float, float]  # x, y, yaw
+
+
+@dataclass(frozen=True)
+class BasePlannerOptions:
+    time_limit_s: float = 1.0
+    simplify_time_s: float = 0.05
+    #: Distance between executed waypoints (metres of xy travel).
+    waypoint_spacing_m: float = 0.05
+    #: State-validity checking resolution, as a fraction of the space's extent.
+    check_resolution: float = 0.002
+
+
+@dataclass(frozen=True)
+class BasePath:
+    waypoints: list[BasePose]
+
+    @property
+    def length_m(self) -> float:
+        return path_length_m(self.waypoints)
+
+
+def path_length_m(waypoints: Sequence[BasePose]) -> float:
+    return float(sum(math.dist(a[:2], b[:2]) for a, b in itertools.pairwise(waypoints)))
+
+
+def wrap_angle(a: float) -> float:
+    """Into [-pi, pi) (OMPL's SE2 bound: a yaw of exactly pi is out of bounds)."""
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+class BaseMotionPlanner:
+    """Plans collision-free base paths in a static 2D world."""
+
+    def __init__(self, checker: FootprintChecker, options: BasePlannerOptions | None = None):
+        self.checker = checker
+        self.options = options or BasePlannerOptions()
+        ou.setLogLevel(ou.LOG_WARN)  # OMPL logs to stdout otherwise
+
+    def plan(self, start: BasePose, goal: BasePose, rng: np.random.Generator) -> BasePath | None:
+        """A free path from start to goal, or None if there is none (within the time limit)."""
+        start = (start[0], start[1], wrap_angle(start[2]))
+        goal = (goal[0], goal[1], wrap_angle(goal[2]))
+        if not (self.checker.is_free(*start) and self.checker.is_free(*goal)):
+            return None
+        straight = self._interpolate([start, goal])
+        if all(self.checker.is_free(*p) for p in straight):
+            return BasePath(straight)
+        coarse = self._ompl(start, goal, int(rng.integers(1, 2**31 - 1)))
+        return None if coarse is None else BasePath(self._interpolate(coarse))
+
+    def _ompl(self, start: BasePose, goal: BasePose, seed: int) -> list[BasePose] | None:
+        bounds_2d = self.checker.occupancy.bounds
+        space = ob.SE2StateSpace()
+        bounds = ob.RealVectorBounds(2)
+        bounds.setLow(0, bounds_2d.x_min)
+        bounds.setHigh(0, bounds_2d.x_max)
+        bounds.setLow(1, bounds_2d.y_min)
+        bounds.setHigh(1, bounds_2d.y_max)
+        space.setBounds(bounds)
+        si = ob.SpaceInformation(space)
+        is_free = self.checker.is_free
+        si.setStateValidityChecker(lambda s: is_free(s.getX(), s.getY(), s.getYaw()))
+        si.setStateValidityCheckingResolution(self.options.check_resolution)
+        si.setup()
+        s, g = si.allocState(), si.allocState()
+        s.setX(start[0]), s.setY(start[1]), s.setYaw(start[2])
+        g.setX(goal[0]), g.setY(goal[1]), g.setYaw(goal[2])
+        pdef = ob.ProblemDefinition(si)
+        pdef.setStartAndGoalStates(s, g)
+        ou.setLogLevel(ou.LOG_NONE)
+        ou.RNG.setSeed(seed)  # see module docstring
+        ou.setLogLevel(ou.LOG_WARN)
+        planner = og.RRTConnect(si)
+        planner.setProblemDefinition(pdef)
+        planner.setup()
+        status = planner.solve(self.options.time_limit_s)
+        if status.getStatus() != ob.PlannerStatus.EXACT_SOLUTION:
+            return None
+        path = pdef.getSolutionPath()
+        og.PathSimplifier(si).simplify(path, self.options.simplify_time_s)
+        # copy the floats out: the states are borrowed from objects that go away
+        return [(st.getX(), st.getY(), st.getYaw()) for st in path.getStates()]
+
+    def _interpolate(self, coarse: Sequence[BasePose]) -> list[BasePose]:
+        """Waypoints every `waypoint_spacing_m` (and every ~10 degrees of turning)."""
+        out = [tuple(coarse[0])]
+        for a, b in itertools.pairwise(coarse):
+            dyaw = wrap_angle(b[2] - a[2])
+            steps = max(1, math.ceil(max(math.dist(a[:2], b[:2]) / self.options.waypoint_spacing_m,
+                                         abs(dyaw) / math.radians(10))))
+            for i in range(1, steps + 1):
+                t = i / steps
+                out.append((a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]),
+                            wrap_angle(a[2] + t * dyaw)))
+        return out

@@ -1,0 +1,135 @@
+"""A 2D map of the fixed world and the PR2's square footprint, for base planning.
+
+Checking the footprint against a precomputed occupancy grid costs microseconds, where a
+PyBullet query per state would cost milliseconds (shared/PITFALLS.md). Fixed geometry
+is every environment link that rises above the floor; carried objects are extra points
+in the robot's frame.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from cramlite.world.pr2 import PR2_BASE_HALF_SIZE_M
+
+#: Links lower than this are floor, not obstacles.
+FLOOR_HEIGHT_M = 0.03
+
+
+@dataclass(frozen=True)
+class Bounds2D:
+    x_min: float
+    x_max: float
+    y_min: float
+    y_max: float
+
+
+class OccupancyMap:
+    """Boolean grid of the fixed world, inflated by a safety margin."""
+
+    def __init__(self, boxes: Iterable[tuple[str, Sequence[float], Sequence[float]]],
+                 resolution_m: float = 0.01, margin_m: float = 0.02,
+                 min_top_m: float = FLOOR_HEIGHT_M):
+        """`min_top_m`: only links whose top is higher count (a map for carried objects
+        held above the counters uses their height)."""
+        boxes = list(boxes)
+        floor = [b for b in boxes if b[2][2] <= FLOOR_HEIGHT_M]
+        obstacles = [b for b in boxes if b[2][2] > max(min_top_m, FLOOR_HEIGHT_M)]
+        source = floor or obstacles
+        self.bounds = Bounds2D(min(b[1][0] for b in source), max(b[2][0] for b in source),
+                               min(b[1][1] for b in source), max(b[2][1] for b in source))
+        self.resolution = resolution_m
+        self.margin = margin_m
+        nx = math.ceil((self.bounds.x_max - self.bounds.x_min) / resolution_m) + 1
+        ny = math.ceil((self.bounds.y_max - self.bounds.y_min) / resolution_m) + 1
+        grid = np.zeros((nx, ny), dtype=bool)
+        for _, lo, hi in obstacles:
+            i0, j0 = self._cell(lo[0], lo[1])
+            i1, j1 = self._cell(hi[0], hi[1])
+            grid[max(i0, 0):max(i1 + 1, 0), max(j0, 0):max(j1 + 1, 0)] = True
+        self.obstacles = grid
+        if margin_m > 0:
+            radius = math.ceil(margin_m / resolution_m)
+            yy, xx = np.mgrid[-radius:radius + 1, -radius:radius + 1]
+            disk = xx**2 + yy**2 <= radius**2
+            grid = ndimage.binary_dilation(grid, structure=disk)
+        self.blocked = grid
+        #: Distance (m) from each cell to the nearest obstacle cell (before inflation).
+        self.clearance = ndimage.distance_transform_edt(~self.obstacles) * resolution_m
+
+    def clearance_at(self, x: float, y: float) -> float:
+        i, j = self._cell(x, y)
+        if 0 <= i < self.clearance.shape[0] and 0 <= j < self.clearance.shape[1]:
+            return float(self.clearance[i, j])
+        return 0.0
+
+    def _cell(self, x: float, y: float) -> tuple[int, int]:
+        return (int(round((x - self.bounds.x_min) / self.resolution)),
+                int(round((y - self.bounds.y_min) / self.resolution)))
+
+    def blocked_at(self, xy: np.ndarray) -> np.ndarray:
+        """True for points (N x 2) on blocked cells or outside the map."""
+        idx = np.rint((xy - (self.bounds.x_min, self.bounds.y_min)) / self.resolution).astype(int)
+        inside = ((idx[:, 0] >= 0) & (idx[:, 0] < self.blocked.shape[0])
+                  & (idx[:, 1] >= 0) & (idx[:, 1] < self.blocked.shape[1]))
+        out = np.ones(len(xy), dtype=bool)
+        out[inside] = self.blocked[idx[inside, 0], idx[inside, 1]]
+        return out
+
+
+def square_outline(half_size: float, spacing: float) -> np.ndarray:
+    """Points along the edge of a square centred at the origin (robot frame)."""
+    n = max(2, math.ceil(2 * half_size / spacing) + 1)
+    t = np.linspace(-half_size, half_size, n)
+    edges = [np.column_stack([t, np.full(n, s)]) for s in (-half_size, half_size)]
+    edges += [np.column_stack([np.full(n, s), t]) for s in (-half_size, half_size)]
+    return np.vstack(edges)
+
+
+class FootprintChecker:
+    """Is the robot (square base + carried points) clear of the fixed world at (x, y, yaw)?
+
+    Carried objects are checked against `carried_occupancy` (obstacles tall enough to
+    reach them) when given, else against the full map.
+    """
+
+    def __init__(self, occupancy: OccupancyMap, half_size_m: float = PR2_BASE_HALF_SIZE_M,
+                 outline_spacing_m: float = 0.04,
+                 carried_occupancy: OccupancyMap | None = None):
+        self.occupancy = occupancy
+        self.carried_occupancy = carried_occupancy or occupancy
+        self.outline = square_outline(half_size_m, outline_spacing_m)
+        self.carried = np.zeros((0, 2))
+        self.checks = 0
+        pad = occupancy.margin + occupancy.resolution
+        self._sure_free = half_size_m * math.sqrt(2) + pad  # circumscribed circle clear
+        self._sure_blocked = half_size_m - pad  # something inside the inscribed circle
+        self._reach = self._sure_free
+
+    def set_carried(self, points: Sequence[Sequence[float]]) -> None:
+        """Robot-frame xy points of carried objects (empty when the hands are free)."""
+        self.carried = np.asarray(points, dtype=float).reshape(-1, 2)
+        extent = float(np.hypot(*self.carried.T).max()) if len(self.carried) else 0.0
+        self._reach = max(self._sure_free, extent + self.occupancy.margin +
+                          self.occupancy.resolution)
+
+    def is_free(self, x: float, y: float, yaw: float) -> bool:
+        self.checks += 1
+        clearance = self.occupancy.clearance_at(x, y)
+        if clearance > self._reach:
+            return True  # nothing within reach of any footprint point, at any yaw
+        if clearance < self._sure_blocked:
+            return False
+        c, s = math.cos(yaw), math.sin(yaw)
+        rotation = np.array([[c, s], [-s, c]])
+        if self.occupancy.blocked_at(self.outline @ rotation + (x, y)).any():
+            return False
+        if len(self.carried):
+            return not bool(self.carried_occupancy.blocked_at(self.carried @ rotation + (x, y))
+                            .any())
+        return True

@@ -1,0 +1,171 @@
+"""Arm inverse kinematics for the PR2 with Pinocchio.
+
+Damped least squares on the SE(3) log error (Pinocchio's standard 6D IK), joint limits
+enforced by clamping after each step, and a few random restarts. The reduced model
+(torso + one arm, everything else locked) is built once per arm and process, never per
+call. The torso height is part of the solution: with it the arm is redundant (8 joints
+for a 6D pose), and the null space pulls the torso toward a preferred height, so
+solutions keep the torso up (and the other, parked arm clear of tables).
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from cramlite.world.pr2 import TORSO_JOINT, pinocchio_pr2
+
+ARMS = ("right", "left")
+ARM_JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "upper_arm_roll_joint",
+              "elbow_flex_joint", "forearm_roll_joint", "wrist_flex_joint", "wrist_roll_joint")
+
+
+def arm_prefix(arm: str) -> str:
+    if arm not in ARMS:
+        raise ValueError(f"arm must be one of {ARMS}, got {arm!r}")
+    return arm[0]
+
+
+def arm_joint_names(arm: str) -> list[str]:
+    return [f"{arm_prefix(arm)}_{j}" for j in ARM_JOINTS]
+
+
+def tool_frame(arm: str) -> str:
+    return f"{arm_prefix(arm)}_gripper_tool_frame"
+
+
+@dataclass(frozen=True)
+class IKOptions:
+    """Solver settings (pyroboplan style: a plain options object beside the solver)."""
+
+    max_iterations: int = 150
+    position_tolerance_m: float = 1e-3
+    rotation_tolerance_rad: float = 1e-2
+    damping: float = 1e-2
+    restarts: int = 8
+    #: Stop a restart early if the error has not halved in this many iterations.
+    stall_iterations: int = 40
+    #: Gain of the null-space pull toward the preferred torso height.
+    torso_preference_gain: float = 0.5
+
+
+@dataclass(frozen=True)
+class IKSolution:
+    joints: dict[str, float]  # torso + arm joint angles by name
+    position_error_m: float
+    rotation_error_rad: float
+    iterations: int
+
+
+class ArmIK:
+    """IK for one arm (optionally with the torso) in the robot's base_footprint frame."""
+
+    def __init__(self, arm: str, with_torso: bool = True, options: IKOptions | None = None):
+        self.arm = arm
+        self.options = options or IKOptions()
+        full = pinocchio_pr2().model
+        keep = ([TORSO_JOINT] if with_torso else []) + arm_joint_names(arm)
+        lock = [full.getJointId(n) for n in full.names[1:] if n not in keep]
+        self.model = pin.buildReducedModel(full, lock, pin.neutral(full))
+        self.data = self.model.createData()
+        self.frame_id = self.model.getFrameId(tool_frame(arm))
+        self.joint_names = [self.model.names[i] for i in range(1, self.model.njoints)]
+        self._continuous = [self.model.nqs[i] == 2 for i in range(1, self.model.njoints)]
+        self._idx_q = [int(self.model.idx_qs[i]) for i in range(1, self.model.njoints)]
+        lower, upper = self.model.lowerPositionLimit, self.model.upperPositionLimit
+        self._bounded = [(i, lower[i], upper[i]) for i, cont in zip(self._idx_q, self._continuous,
+                                                                       strict=True) if not cont]
+        self._torso = None
+        if TORSO_JOINT in self.joint_names:
+            jid = self.model.getJointId(TORSO_JOINT)
+            self._torso = (int(self.model.idx_qs[jid]), int(self.model.idx_vs[jid]))
+
+    # -- conversions -------------------------------------------------------------------
+    def to_q(self, joints: dict[str, float]) -> np.ndarray:
+        q = pin.neutral(self.model)
+        for name, i, cont in zip(self.joint_names, self._idx_q, self._continuous, strict=True):
+            if name in joints:
+                if cont:
+                    q[i], q[i + 1] = np.cos(joints[name]), np.sin(joints[name])
+                else:
+                    q[i] = joints[name]
+        return q
+
+    def from_q(self, q: np.ndarray) -> dict[str, float]:
+        out = {}
+        for name, i, cont in zip(self.joint_names, self._idx_q, self._continuous, strict=True):
+            out[name] = float(np.arctan2(q[i + 1], q[i])) if cont else float(q[i])
+        return out
+
+    def random_q(self, rng: np.random.Generator) -> np.ndarray:
+        q = pin.neutral(self.model)
+        for i, lo, hi in self._bounded:
+            q[i] = rng.uniform(lo, hi)
+        for i, cont in zip(self._idx_q, self._continuous, strict=True):
+            if cont:
+                a = rng.uniform(-np.pi, np.pi)
+                q[i], q[i + 1] = np.cos(a), np.sin(a)
+        return q
+
+    def forward(self, joints: dict[str, float]) -> pin.SE3:
+        q = self.to_q(joints)
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return self.data.oMf[self.frame_id].copy()
+
+    # -- solving -----------------------------------------------------------------------
+    def solve(self, target: pin.SE3, rng: np.random.Generator,
+              seed_joints: dict[str, float] | None = None,
+              preferred_torso_m: float | None = None) -> IKSolution | None:
+        """Joint angles that put the tool frame at `target` (base frame), or None."""
+        opts = self.options
+        starts = [self.to_q(seed_joints)] if seed_joints else []
+        while len(starts) < opts.restarts + 1:
+            starts.append(self.random_q(rng))
+        for q0 in starts:
+            result = self._descend(q0, target, preferred_torso_m)
+            if result is not None:
+                return result
+        return None
+
+    def _descend(self, q: np.ndarray, target: pin.SE3,
+                 preferred_torso_m: float | None = None) -> IKSolution | None:
+        opts, model, data, fid = self.options, self.model, self.data, self.frame_id
+        eye6 = np.eye(6)
+        best, best_at = np.inf, 0
+        for it in range(opts.max_iterations):
+            pin.framesForwardKinematics(model, data, q)
+            error_transform = data.oMf[fid].actInv(target)
+            err = pin.log6(error_transform).vector
+            pos_err, rot_err = np.linalg.norm(err[:3]), np.linalg.norm(err[3:])
+            if pos_err < opts.position_tolerance_m and rot_err < opts.rotation_tolerance_rad:
+                return IKSolution(self.from_q(q), float(pos_err), float(rot_err), it)
+            total = pos_err + rot_err
+            if total < 0.5 * best:
+                best, best_at = total, it
+            elif it - best_at > opts.stall_iterations:
+                return None
+            jac = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)
+            jac = pin.Jlog6(error_transform) @ jac
+            pinv = jac.T @ np.linalg.inv(jac @ jac.T + opts.damping * eye6)
+            v = pinv @ err
+            if preferred_torso_m is not None and self._torso is not None:
+                iq, iv = self._torso
+                pull = np.zeros(model.nv)
+                pull[iv] = opts.torso_preference_gain * (preferred_torso_m - q[iq])
+                v += pull - pinv @ (jac @ pull)  # projected into the null space
+            q = pin.integrate(model, q, v)
+            for i, lo, hi in self._bounded:
+                if q[i] < lo:
+                    q[i] = lo
+                elif q[i] > hi:
+                    q[i] = hi
+        return None
+
+
+@functools.cache
+def arm_ik(arm: str, with_torso: bool = True) -> ArmIK:
+    """The IK solver of an arm, built once per process (the model is never rebuilt)."""
+    return ArmIK(arm, with_torso)

@@ -1,0 +1,120 @@
+"""One trial: a setup, a plan and a strategy, run headless in a world; its measurements.
+
+A `TrialRunner` builds its world once and resets it between trials (cheap snapshot
+restore), which batch workers rely on. Every random choice follows the trial's seed:
+the motion layer and the strategy each get a generator derived from it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from cramlite.designators import ExecutionOptions, RobotContext, SimulatedProcessModules
+from cramlite.strategies import make_strategy
+from cramlite.world.bodies import yaw_quat
+from cramlite.world.setup import Setup, load_setup
+from cramlite.world.world import World
+
+PLAN_NAMES = ("set-table", "clear-table")
+RESTING_TOLERANCE_M = 0.01
+
+
+@dataclass
+class TrialResult:
+    setup: str
+    plan: str
+    strategy: str
+    seed: int
+    success: bool
+    order: list[str]
+    failures: list[dict[str, Any]]
+    base_path_m: float  #: length of the base paths actually driven
+    straight_line_m: float  #: sum of straight xy legs robot -> item -> goal
+    wall_s: float  #: planning + execution wall time (world loading excluded)
+    robot_time_s: float  #: wall_s + driving time at the robot's speed
+    items: dict[str, dict[str, Any]] = field(default_factory=dict)
+    log: list[str] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+class TrialRunner:
+    """Runs trials of one setup in one world, resetting it between trials."""
+
+    def __init__(self, setup: Setup | str, gui: bool = False,
+                 options: ExecutionOptions | None = None):
+        self.setup = setup if isinstance(setup, Setup) else load_setup(setup)
+        self.world = World.from_setup(self.setup, gui=gui)
+        self.options = options or ExecutionOptions()
+        self.modules = SimulatedProcessModules(self.world)
+        self._initial = self.world.snapshot()
+
+    def close(self) -> None:
+        self.world.close()
+
+    def __enter__(self) -> TrialRunner:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def run(self, strategy: str = "baseline", plan: str = "set-table", seed: int = 0,
+            params: dict[str, float] | None = None, dims: str = "xy") -> TrialResult:
+        from plans import PLANS
+
+        if plan not in PLANS:
+            raise ValueError(f"unknown plan {plan!r}; expected one of {', '.join(PLANS)}")
+        self.world.restore(self._initial)
+        if plan == "clear-table":
+            self._items_at_targets()
+        chooser = make_strategy(strategy, params=params, dims=dims,
+                                rng=np.random.default_rng([seed, 1]),
+                                order=list(self.setup.baseline_order))
+        ctx = RobotContext(world=self.world, modules=self.modules,
+                           rng=np.random.default_rng([seed, 0]), options=self.options)
+        start = time.perf_counter()
+        report = PLANS[plan](ctx, self.setup, chooser)
+        wall_s = time.perf_counter() - start
+        items, success = self._check(plan)
+        success = success and not report.failures
+        return TrialResult(
+            setup=self.setup.name, plan=plan, strategy=strategy, seed=seed, success=success,
+            order=report.order, failures=[f.as_dict() for f in report.failures],
+            base_path_m=round(ctx.base_path_m, 6), straight_line_m=round(report.straight_line_m, 6),
+            wall_s=wall_s, robot_time_s=wall_s + ctx.base_path_m / self.options.drive_speed_m_s,
+            items=items, log=ctx.log)
+
+    def _items_at_targets(self) -> None:
+        for spec in self.setup.items:
+            self.world.objects[spec.name].set_pose(spec.target.xyz, yaw_quat(spec.target.yaw))
+
+    def _check(self, plan: str) -> tuple[dict[str, dict[str, Any]], bool]:
+        """Where each item ended; success = all at their goal and resting."""
+        items, success = {}, True
+        counter = self.world.surface("counter")
+        for spec in self.setup.items:
+            (x, y, z), _ = self.world.objects[spec.name].pose()
+            if plan == "set-table":
+                off = math.dist((x, y), (spec.target.x, spec.target.y))
+                ok = off <= self.options.place_tolerance_m and \
+                    abs(z - spec.target.z) <= RESTING_TOLERANCE_M
+                items[spec.name] = {"position": [round(x, 4), round(y, 4), round(z, 4)],
+                                    "off_target_m": round(off, 4), "ok": ok}
+            else:
+                ok = counter.contains_xy(x, y) and abs(z - counter.top_z) <= RESTING_TOLERANCE_M
+                items[spec.name] = {"position": [round(x, 4), round(y, 4), round(z, 4)], "ok": ok}
+            success &= ok
+        return items, success
+
+
+def run_trial(setup: Setup | str, strategy: str = "baseline", plan: str = "set-table",
+              seed: int = 0, gui: bool = False, **kwargs: Any) -> TrialResult:
+    """One trial in a fresh world."""
+    with TrialRunner(setup, gui=gui) as runner:
+        return runner.run(strategy, plan, seed, **kwargs)

@@ -1,0 +1,76 @@
+"""Setting the table: every item of the setup to its target on the island.
+
+Generic: park the arms and raise the torso, then, while items remain, ask the ordering
+strategy which item is next (from the robot's current position; the last item needs no
+question) and transport it. A failed item is reported and the plan goes on.
+"""
+
+from __future__ import annotations
+
+from cramlite.designators import (
+    MoveTorsoAction,
+    ObjectDesignatorDescription,
+    ParkArmsAction,
+    PlanFailure,
+    RobotContext,
+    TransportAction,
+)
+from cramlite.strategies import Candidate, Strategy
+from cramlite.world.pr2 import TORSO_UP_M
+from cramlite.world.setup import Setup
+from plans.report import PlanReport
+
+
+def item_candidate(ctx: RobotContext, setup: Setup, name: str,
+                   then_at: tuple[float, float, float]) -> Candidate:
+    """What the strategy sees of an item: where it is now, its k category and c flag,
+    and where the robot will stand after delivering it (`then_at`)."""
+    spec = setup.item(name)
+    (x, y, z), _ = ctx.modules.object_pose(name)
+    return Candidate(name=name, position=(x, y, z), category=spec.category,
+                     contained=spec.contained, then_at=then_at)
+
+
+def robot_position(ctx: RobotContext) -> tuple[float, float, float]:
+    x, y, _ = ctx.modules.base_pose()
+    return (x, y, 0.0)
+
+
+def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
+                            goals: dict[str, dict], report: PlanReport) -> PlanReport:
+    """The loop both plans share: ask, transport, record. `goals` maps each item to the
+    TransportAction arguments that say where it goes (`target` or `surface`)."""
+    ParkArmsAction().perform(ctx)
+    MoveTorsoAction(TORSO_UP_M).perform(ctx)
+    remaining = [n for n in setup.baseline_order if n in goals]
+
+    def then_at(name: str) -> tuple[float, float, float]:
+        goal = goals[name].get("target") or goals[name].get("preferred")
+        if goal is None:  # somewhere on a surface: its middle
+            surf = ctx.world.surface(goals[name]["surface"])
+            goal = ((surf.x_min + surf.x_max) / 2, (surf.y_min + surf.y_max) / 2)
+        return (goal[0], goal[1], 0.0)
+
+    strategy.reset([item_candidate(ctx, setup, n, then_at(n)) for n in remaining],
+                   robot_position(ctx))
+    while remaining:
+        candidates = [item_candidate(ctx, setup, n, then_at(n)) for n in remaining]
+        here = robot_position(ctx)
+        chosen = candidates[0] if len(candidates) == 1 else strategy.choose(candidates, here)
+        report.order.append(chosen.name)
+        remaining.remove(chosen.name)
+        try:
+            TransportAction(ObjectDesignatorDescription(names=[chosen.name]),
+                            **goals[chosen.name]).perform(ctx)
+        except PlanFailure as failure:
+            ctx.note(f"failed: {failure}")
+            report.failures.append(failure)
+        (x, y, _), _ = ctx.modules.object_pose(chosen.name)
+        report.add_leg(here[:2], chosen.position[:2], (x, y))
+    ParkArmsAction().perform(ctx)
+    return report
+
+
+def set_table(ctx: RobotContext, setup: Setup, strategy: Strategy) -> PlanReport:
+    goals = {spec.name: {"target": spec.target.xyz} for spec in setup.items}
+    return fetch_in_strategy_order(ctx, setup, strategy, goals, PlanReport())
