@@ -228,7 +228,7 @@ class TransportAction:
                 ParkArmsAction().perform(ctx)
         rejected = location.describe_rejections()
         if rejected:
-            tried.append(f"base poses {rejected}")
+            tried.append(rejected)
         cls = type(last) if last is not None else ObjectUnreachable
         reason = last.reason if last is not None else \
             "no base pose from which an arm reaches it"

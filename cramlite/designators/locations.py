@@ -124,7 +124,15 @@ class CostmapLocation:
         return ReachablePose(base, arm, grasp, solution.joints, pre_solution.joints)
 
     def describe_rejections(self) -> str:
-        return ", ".join(f"{n} rejected by {why}" for why, n in self.rejected.items() if n)
+        """What was checked and why it failed, for failure messages."""
+        total = sum(self.rejected.values())
+        if not total:
+            return ""
+        why = {"footprint": "base inside fixed geometry", "ik": "out of the arm's reach (IK)",
+               "arm collision": "arm would hit something"}
+        parts = ", ".join(f"{n} {why[k]}" for k, n in self.rejected.items() if n)
+        return (f"{total} base poses {STANDOFFS_M[0]:.2f}-{STANDOFFS_M[-1]:.2f} m away "
+                f"({'/'.join(self.arms)} arm, {'/'.join(self.grasps)} grasp): {parts}")
 
 
 def arm_clear(ctx: RobotContext, base: BasePose, joints: dict[str, float],

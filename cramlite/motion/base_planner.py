@@ -27,6 +27,9 @@ BasePose = tuple[float, float, float]  # x, y, yaw
 @dataclass(frozen=True)
 class BasePlannerOptions:
     time_limit_s: float = 1.0
+    #: False: reduce vertices and rope-shortcut (~10 ms); True: OMPL's full `simplify`
+    #: (~60 ms here, paths ~8 % shorter on detours).
+    full_simplify: bool = False
     simplify_time_s: float = 0.05
     #: Distance between executed waypoints (metres of xy travel).
     waypoint_spacing_m: float = 0.05
@@ -101,7 +104,13 @@ class BaseMotionPlanner:
         if status.getStatus() != ob.PlannerStatus.EXACT_SOLUTION:
             return None
         path = pdef.getSolutionPath()
-        og.PathSimplifier(si).simplify(path, self.options.simplify_time_s)
+        simplifier = og.PathSimplifier(si)
+        if self.options.full_simplify:
+            simplifier.simplify(path, self.options.simplify_time_s)
+        else:
+            simplifier.reduceVertices(path)
+            simplifier.ropeShortcutPath(path)
+            simplifier.reduceVertices(path)
         # copy the floats out: the states are borrowed from objects that go away
         return [(st.getX(), st.getY(), st.getYaw()) for st in path.getStates()]
 

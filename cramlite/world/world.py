@@ -6,6 +6,8 @@ nothing is kept at module level, so any number of worlds can live in one process
 
 from __future__ import annotations
 
+import os
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -54,6 +56,9 @@ class World:
     """A PyBullet world. Use as a context manager or call `close()`."""
 
     def __init__(self, gui: bool = False):
+        if gui and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+            # PyBullet would exit the whole process from C code
+            raise RuntimeError("the GUI needs a display, and DISPLAY is not set")
         with c_stdout_silenced():
             self.client = p.connect(p.GUI if gui else p.DIRECT)
         if self.client < 0:

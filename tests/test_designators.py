@@ -1,0 +1,198 @@
+"""Each designator type in a real PyBullet world, fall-through, and the plan language."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from cramlite.designators import (
+    CostmapLocation,
+    MoveTorsoAction,
+    NavigateAction,
+    NavigationFailed,
+    ObjectDesignatorDescription,
+    ObjectNotFound,
+    ObjectUnreachable,
+    ParkArmsAction,
+    PickUpAction,
+    PlaceAction,
+    PlacingLocation,
+    PlanFailure,
+    Sequential,
+    SimulatedProcessModules,
+    TransportAction,
+    TryInOrder,
+    simulated_robot,
+)
+from cramlite.designators.grasps import grasp_height_m
+from cramlite.designators.motions import AttachMotion, MoveArmJointsMotion
+from cramlite.motion.ik import arm_ik, tool_frame
+from cramlite.world import World, load_setup
+
+
+@pytest.fixture
+def world():
+    with World.from_setup(load_setup("v1")) as w:
+        yield w
+
+
+def test_object_designators(world) -> None:
+    with simulated_robot(world) as ctx:
+        cup = ObjectDesignatorDescription(names=["cup"]).resolve(ctx)
+        assert cup.name == "cup" and cup.type == "cup"
+        assert cup.pose(ctx)[0] == pytest.approx((1.45, 0.85, 0.85), abs=2e-3)
+        by_type = [o.name for o in ObjectDesignatorDescription(types=["bowl", "milk"]).ground(ctx)]
+        assert sorted(by_type) == ["bowl", "milk"]
+        with pytest.raises(ObjectNotFound, match="teapot"):
+            ObjectDesignatorDescription(names=["teapot"]).resolve(ctx)
+
+
+def test_costmap_location_offers_checked_reachable_poses(world) -> None:
+    with simulated_robot(world) as ctx:
+        position = world.objects["milk"].position()
+        location = CostmapLocation(position, {"front": grasp_height_m("front", 0.2)},
+                                   ignore=["milk"])
+        poses = []
+        for pose in location.ground(ctx):
+            poses.append(pose)
+            if len(poses) == 3:
+                break
+        assert len(poses) == 3 and len({p.base for p in poses}) == 3
+        for pose in poses:
+            assert ctx.checker.is_free(*pose.base)
+            world.robot.set_base_pose(*pose.base)
+            world.robot.set_joint_positions(pose.joints)
+            tool, _ = world.robot.link_pose(tool_frame(pose.arm))
+            assert math.dist(tool, (position[0], position[1], position[2] + 0.1)) < 0.005
+            print(pose.describe())
+
+
+def test_costmap_location_is_empty_for_an_unreachable_point(world) -> None:
+    with simulated_robot(world) as ctx:
+        behind_counter = (1.8, 0.0, 0.85)  # back of the counter: no base pose reaches it
+        location = CostmapLocation(behind_counter, {"front": 0.1})
+        assert list(location.ground(ctx)) == []
+        assert "base inside fixed geometry" in location.describe_rejections()
+
+
+def test_placing_location_avoids_occupied_spots_and_respects_yaw(world) -> None:
+    with simulated_robot(world) as ctx:
+        cup = ObjectDesignatorDescription(names=["cup"]).resolve(ctx)
+        occupied = world.objects["milk"].position()  # the milk's spot on the counter
+        spots = list(PlacingLocation(cup, target=occupied).ground(ctx))
+        assert spots == []
+        free = list(PlacingLocation(cup, surface="counter", preferred=occupied).ground(ctx))
+        assert free and math.dist(free[0][:2], occupied[:2]) > 0.08
+        cereal = ObjectDesignatorDescription(names=["breakfast-cereal"]).resolve(ctx)
+        # 12 cm beside the milk (7.5 cm wide) along y: the 19 cm wide side of the cereal
+        # box would overlap it; turned by 90 degrees (7 cm along y) it keeps 4.75 cm clear
+        beside_milk = (1.45, -0.15 + 0.12, 0.85)
+        placing = PlacingLocation(cereal, target=beside_milk)
+        assert not placing.is_free(ctx, beside_milk, 0.0)
+        assert placing.is_free(ctx, beside_milk, math.pi / 2)
+
+
+def test_motions_move_attached_objects_with_the_gripper(world) -> None:
+    with simulated_robot(world) as ctx:
+        world.robot.set_base_pose(0.85, 0.85 + 0.188, 0.0)
+        AttachMotion("right", "cup").perform(ctx)
+        before = np.array(world.objects["cup"].position())
+        tool_before = np.array(world.robot.link_pose(tool_frame("right"))[0])
+        MoveArmJointsMotion({"torso_lift_joint": 0.2}).perform(ctx)
+        moved = np.array(world.objects["cup"].position()) - before
+        tool_moved = np.array(world.robot.link_pose(tool_frame("right"))[0]) - tool_before
+        assert moved == pytest.approx(tool_moved, abs=1e-6)
+        assert moved[2] == pytest.approx(0.2, abs=1e-3)
+
+
+def test_actions_pick_and_place_step_by_step(world) -> None:
+    with simulated_robot(world, seed=3) as ctx:
+        ParkArmsAction().perform(ctx)
+        MoveTorsoAction(0.25).perform(ctx)
+        assert world.robot.joint_positions(["torso_lift_joint"])["torso_lift_joint"] == \
+            pytest.approx(0.25)
+        NavigateAction((0.85, 0.35 + 0.188, 0.0)).perform(ctx)  # in front of the spoon
+        assert ctx.base_path_m > 2.0
+        arm = PickUpAction("spoon", arms=["right"]).perform(ctx)
+        assert ctx.holding[arm].obj == "spoon"
+        assert world.objects["spoon"].position()[2] > 0.95  # lifted off the counter
+        PlaceAction("spoon", (1.45, 0.2, 0.85)).perform(ctx)
+        assert not ctx.holding
+        assert world.objects["spoon"].position() == pytest.approx((1.45, 0.2, 0.85), abs=0.01)
+
+
+def test_navigate_fails_typed_when_there_is_no_path(world) -> None:
+    with simulated_robot(world) as ctx, pytest.raises(NavigationFailed, match="no collision"):
+        NavigateAction((1.5, 0.0, 0.0)).perform(ctx)  # inside the counter
+
+
+def test_transport_moves_an_object_to_its_target(world) -> None:
+    with simulated_robot(world, seed=1) as ctx:
+        TransportAction("bowl", target=(-0.85, 1.24, 0.86)).perform(ctx)
+        assert world.objects["bowl"].position() == pytest.approx((-0.85, 1.24, 0.86), abs=0.05)
+        assert not ctx.holding
+
+
+class NavigationFailsOnce(SimulatedProcessModules):
+    """Injected failure: the first drive is refused (say, a person steps in the way)."""
+
+    def __init__(self, world):
+        super().__init__(world)
+        self.refused = 0
+
+    def move_base(self, waypoints):
+        if self.refused == 0:
+            self.refused += 1
+            raise NavigationFailed("path blocked by a person (injected)")
+        super().move_base(waypoints)
+
+
+def test_transport_falls_through_to_the_next_candidate(world) -> None:
+    with simulated_robot(world, seed=1) as ctx:
+        ctx.modules = NavigationFailsOnce(world)
+        TransportAction("cup", target=(-1.0, 1.1, 0.86)).perform(ctx)
+        assert ctx.modules.refused == 1
+        assert world.objects["cup"].position() == pytest.approx((-1.0, 1.1, 0.86), abs=0.05)
+        print(ctx.log)
+
+
+def test_transport_failure_says_what_was_tried(world) -> None:
+    with simulated_robot(world) as ctx:
+        world.objects["milk"].set_pose((1.8, -0.15, 0.85))  # back of the counter
+        with pytest.raises(ObjectUnreachable) as info:
+            TransportAction("milk", target=(-0.85, 1.6, 0.86)).perform(ctx)
+        failure = info.value
+        assert failure.object == "milk" and failure.tried
+        assert "base poses" in failure.tried[-1]
+        assert failure.as_dict()["type"] == "ObjectUnreachable"
+
+
+def test_plan_language() -> None:
+    calls = []
+
+    def ok(name):
+        return lambda ctx: calls.append(name) or name
+
+    def fail(name):
+        def step(ctx):
+            calls.append(name)
+            raise ObjectUnreachable(f"{name} failed", obj="x")
+        return step
+
+    assert Sequential([ok("a"), ok("b")]).perform(None) == ["a", "b"]
+    assert TryInOrder([fail("c"), ok("d"), ok("e")]).perform(None) == "d"
+    with pytest.raises(ObjectUnreachable) as info:
+        TryInOrder([fail("f"), fail("g")], describe=lambda s: "alt").perform(None)
+    assert len(info.value.tried) == 2 and isinstance(info.value, PlanFailure)
+    with pytest.raises(ObjectUnreachable):
+        Sequential([ok("h"), fail("i"), ok("never")]).perform(None)
+    assert calls == ["a", "b", "c", "d", "f", "g", "h", "i"]
+
+
+def test_ik_solver_is_shared_not_rebuilt(world) -> None:
+    solver = arm_ik("left")
+    with simulated_robot(world) as ctx:
+        TransportAction("cup", target=(-1.0, 1.1, 0.86)).perform(ctx)
+    assert arm_ik("left") is solver
