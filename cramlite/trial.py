@@ -65,7 +65,9 @@ class TrialRunner:
         self.close()
 
     def run(self, strategy: str = "baseline", plan: str = "set-table", seed: int = 0,
-            params: dict[str, float] | None = None, dims: str = "xy") -> TrialResult:
+            params: dict[str, float] | None = None, dims: str = "xy",
+            order: list[str] | None = None) -> TrialResult:
+        """One trial; `order` replaces the setup's baseline order (for `baseline`)."""
         from plans import PLANS
 
         if plan not in PLANS:
@@ -75,7 +77,7 @@ class TrialRunner:
             self._items_at_targets()
         chooser = make_strategy(strategy, params=params, dims=dims,
                                 rng=np.random.default_rng([seed, 1]),
-                                order=list(self.setup.baseline_order))
+                                order=list(order or self.setup.baseline_order))
         ctx = RobotContext(world=self.world, modules=self.modules,
                            rng=np.random.default_rng([seed, 0]), options=self.options)
         start = time.perf_counter()

@@ -25,6 +25,12 @@ KITCHEN_BOXES: dict[str, tuple[float, float, float, float, float, float, str]] =
     "island": (-1.47, -0.67, 0.49, 2.94, 0.0, 0.86, "0.62 0.50 0.38 1"),
     "fridge": (1.25, 1.95, -2.0, -1.25, 0.0, 1.8, "0.85 0.87 0.90 1"),
     "oven": (1.25, 1.85, 1.45, 2.05, 0.0, 0.85, "0.25 0.25 0.27 1"),
+    # An open-top bin on the far end of the island: items in it are "contained" (OPM c).
+    "bin": (-1.15, -0.80, 2.25, 2.70, 0.86, 0.87, "0.35 0.55 0.45 1"),
+    "bin_wall_near": (-0.81, -0.80, 2.25, 2.70, 0.87, 0.93, "0.35 0.55 0.45 1"),
+    "bin_wall_far": (-1.15, -1.14, 2.25, 2.70, 0.87, 0.93, "0.35 0.55 0.45 1"),
+    "bin_wall_south": (-1.14, -0.81, 2.25, 2.26, 0.87, 0.93, "0.35 0.55 0.45 1"),
+    "bin_wall_north": (-1.14, -0.81, 2.69, 2.70, 0.87, 0.93, "0.35 0.55 0.45 1"),
 }
 # Visual-only decoration (no collision): the sink basin on the counter.
 KITCHEN_VISUALS = {"sink": (1.45, 1.75, 1.0, 1.3, 0.85, 0.853, "0.45 0.50 0.55 1")}

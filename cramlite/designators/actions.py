@@ -206,6 +206,8 @@ class TransportAction:
             raise
 
     def _fetch(self, ctx: RobotContext, obj: ObjectDesignator) -> ReachablePose:
+        """Navigate and pick up, trying base poses best first; an arm and grasp that could
+        not put the object down at the goal are not used."""
         (x, y, z), _ = obj.pose(ctx)
         height = obj.height_m(ctx)
         tried: list[str] = []
@@ -214,9 +216,20 @@ class TransportAction:
         arms = [a for a in (self.arms or ARMS) if a not in ctx.holding]
         location = CostmapLocation((x, y, z), {g: grasp_height_m(g, height) for g in grasps},
                                    arms, ignore=[obj.name])
-        for attempt, reach in enumerate(location.ground(ctx)):
-            if attempt >= ctx.options.max_candidates:
+        deliverable: dict[tuple[str, str], bool] = {}
+        attempts = 0
+        for reach in location.ground(ctx):
+            combo = (reach.arm, reach.grasp)
+            if combo not in deliverable:
+                deliverable[combo] = self._can_deliver(ctx, obj, reach.arm, reach.grasp, height)
+                if not deliverable[combo]:
+                    tried.append(f"{reach.arm} arm {reach.grasp} grasp: could not put it down "
+                                 "at the goal")
+            if not deliverable[combo]:
+                continue
+            if attempts >= ctx.options.max_candidates:
                 break
+            attempts += 1
             try:
                 NavigateAction(reach.base).perform(ctx)
                 PickUpAction(obj, reach=reach).perform(ctx)
@@ -230,9 +243,26 @@ class TransportAction:
         if rejected:
             tried.append(rejected)
         cls = type(last) if last is not None else ObjectUnreachable
-        reason = last.reason if last is not None else \
-            "no base pose from which an arm reaches it"
+        reason = last.reason if last is not None else (
+            "no arm and grasp that reaches it can put it down at the goal"
+            if deliverable and not any(deliverable.values())
+            else "no base pose from which an arm reaches it")
         raise cls(reason, obj=obj.name, tried=tried)
+
+    def _can_deliver(self, ctx: RobotContext, obj: ObjectDesignator, arm: str, grasp: str,
+                     height: float) -> bool:
+        """Is there a base pose from which `arm` puts the object down at (one of the first
+        few free spots of) the goal with `grasp`?"""
+        placing = PlacingLocation(obj, target=self.target, surface=self.surface,
+                                  preferred=self.preferred)
+        for index, spot in enumerate(placing.ground(ctx)):
+            location = CostmapLocation(spot, {grasp: grasp_height_m(grasp, height)}, [arm],
+                                       ignore=[obj.name], max_ik_checks=12)
+            if next(iter(location.ground(ctx)), None) is not None:
+                return True
+            if index >= 2:
+                return False
+        return False
 
     def _deliver(self, ctx: RobotContext, obj: ObjectDesignator) -> None:
         arm = next(a for a, h in ctx.holding.items() if h.obj == obj.name)

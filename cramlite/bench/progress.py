@@ -1,0 +1,49 @@
+"""Batch progress: a live bar on a terminal, a quiet line every 10 % otherwise."""
+
+from __future__ import annotations
+
+import sys
+import time
+from typing import Any
+
+
+class Progress:
+    def __init__(self, total: int, already: int = 0, stream=None):
+        self.stream = stream or sys.stderr
+        self.total, self.done, self.failed = total, 0, 0
+        self.already = already
+        self.start = time.perf_counter()
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+        self._bar = None
+        self._next_report = 0.1
+        if self.tty:
+            from tqdm import tqdm
+            self._bar = tqdm(total=total, desc="trials", unit="trial", file=self.stream,
+                             dynamic_ncols=True)
+        elif already:
+            print(f"bench: resuming, {already} trials already done, {total} to run",
+                  file=self.stream, flush=True)
+
+    def update(self, row: dict[str, Any]) -> None:
+        self.done += 1
+        self.failed += not _truthy(row.get("success"))
+        elapsed = time.perf_counter() - self.start
+        rate = self.done / elapsed * 60 if elapsed > 0 else 0.0
+        left = (self.total - self.done) / (self.done / elapsed) if self.done else 0.0
+        if self._bar is not None:
+            self._bar.set_postfix(failed=self.failed, rate=f"{rate:.0f}/min")
+            self._bar.update(1)
+        elif self.total and (self.done / self.total >= self._next_report
+                             or self.done == self.total):
+            print(f"bench: {self.done}/{self.total} trials, {self.failed} failed, "
+                  f"{rate:.1f}/min, ~{left:.0f} s left", file=self.stream, flush=True)
+            while self._next_report <= self.done / self.total:
+                self._next_report += 0.1
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+
+
+def _truthy(value: Any) -> bool:
+    return value is True or str(value) == "True"

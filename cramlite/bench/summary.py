@@ -1,0 +1,166 @@
+"""Batch summary: per setup and strategy, and paired tests OPM vs baseline (scipy).
+
+Columns: trials, success rate, mean/median wall time, robot time (wall + driving at the
+robot's speed), driven base path, straight-line legs, the most frequent fetch order and
+its normalised edit distance to the setup's baseline order.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import statistics
+from collections import Counter, defaultdict
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cramlite.bench.specs import FIXED_ORDER
+from cramlite.evaluation.metrics import edit_distance
+
+MEASURES = ("wall_s", "robot_time_s", "base_path_m", "straight_line_m")
+
+
+def _float(value: Any) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return float("nan")
+
+
+def _ok(row: dict[str, Any]) -> bool:
+    return str(row.get("success")) == "True"
+
+
+def summarise(rows: Sequence[dict[str, Any]], baseline_orders: dict[str, Sequence[str]],
+              ) -> list[dict[str, Any]]:
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
+    for row in rows:
+        if row["strategy"] != FIXED_ORDER:
+            groups[(row["setup"], row["strategy"])].append(row)
+    out = []
+    for (setup, strategy), group in sorted(groups.items()):
+        entry: dict[str, Any] = {"setup": setup, "strategy": strategy, "trials": len(group),
+                                 "success_rate": sum(map(_ok, group)) / len(group)}
+        for measure in MEASURES:
+            values = [_float(r[measure]) for r in group if _ok(r)]
+            values = [v for v in values if np.isfinite(v)]
+            entry[f"{measure}_mean"] = float(np.mean(values)) if values else float("nan")
+            entry[f"{measure}_median"] = float(np.median(values)) if values else float("nan")
+        orders = Counter(r["order"] for r in group if r["order"])
+        order = orders.most_common(1)[0][0] if orders else ""
+        entry["order"] = order
+        baseline = baseline_orders.get(setup)
+        entry["edit_vs_baseline"] = (edit_distance(order.split(), list(baseline))
+                                     if order and baseline else float("nan"))
+        out.append(entry)
+    return out
+
+
+def paired_tests(rows: Sequence[dict[str, Any]], strategy: str, reference: str = "baseline",
+                 ) -> dict[str, Any]:
+    """Wilcoxon signed-rank of `strategy` vs `reference`, paired by (setup, trial), on each
+    measure; and on per-setup means (n = number of setups), as the source compared."""
+    from scipy import stats
+
+    by_key = {(r["setup"], r["trial"], r["strategy"]): r for r in rows if _ok(r)}
+    pairs = [(by_key[(s, t, strategy)], by_key[(s, t, reference)])
+             for (s, t, name) in by_key if name == strategy and (s, t, reference) in by_key]
+    result: dict[str, Any] = {"strategy": strategy, "reference": reference, "pairs": len(pairs)}
+    for measure in MEASURES[1:]:
+        a = np.array([_float(x[measure]) for x, _ in pairs])
+        b = np.array([_float(y[measure]) for _, y in pairs])
+        test: dict[str, Any] = {"mean": float(a.mean()) if len(a) else None,
+                                "reference_mean": float(b.mean()) if len(b) else None}
+        if len(a) and np.any(a != b):
+            res = stats.wilcoxon(a, b)
+            test.update(W=float(res.statistic), p=float(res.pvalue))
+        else:
+            test.update(W=None, p=None, note="no pairs or no differences")
+        setups = sorted({x["setup"] for x, _ in pairs})
+        if len(setups) >= 2:
+            ma = [np.mean([_float(x[measure]) for x, _ in pairs if x["setup"] == s])
+                  for s in setups]
+            mb = [np.mean([_float(y[measure]) for _, y in pairs if y["setup"] == s])
+                  for s in setups]
+            if np.any(np.array(ma) != np.array(mb)):
+                res = stats.wilcoxon(ma, mb)
+                test["per_setup"] = {"n": len(setups), "W": float(res.statistic),
+                                     "p": float(res.pvalue)}
+        result[measure] = test
+    return result
+
+
+def order_percentiles(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """With all orders run: where each strategy's mean path and time fall among them."""
+    out = []
+    setups = sorted({r["setup"] for r in rows if r["strategy"] == FIXED_ORDER})
+    for setup in setups:
+        every = [r for r in rows if r["setup"] == setup and r["strategy"] == FIXED_ORDER
+                 and _ok(r)]
+        for strategy in sorted({r["strategy"] for r in rows if r["setup"] == setup} -
+                               {FIXED_ORDER}):
+            mine = [r for r in rows if r["setup"] == setup and r["strategy"] == strategy
+                    and _ok(r)]
+            if not mine or not every:
+                continue
+            entry = {"setup": setup, "strategy": strategy, "orders": len(every)}
+            for measure in ("base_path_m", "robot_time_s", "straight_line_m"):
+                value = statistics.mean(_float(r[measure]) for r in mine)
+                population = np.array([_float(r[measure]) for r in every])
+                entry[f"{measure}_percentile"] = float((population < value).mean() * 100)
+            out.append(entry)
+    return out
+
+
+def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[str, Any]],
+                  percentiles: list[dict[str, Any]]) -> str:
+    """summary.csv and summary.md; returns the Markdown (also printed)."""
+    if summary:
+        with (folder / "summary.csv").open("w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=list(summary[0]))
+            writer.writeheader()
+            writer.writerows(summary)
+    lines = ["| setup | strategy | trials | success | wall s (mean/median) | robot time s | "
+             "driven path m | straight-line m | edit vs baseline | order |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for e in summary:
+        lines.append(
+            f"| {e['setup']} | {e['strategy']} | {e['trials']} | {e['success_rate']:.0%} | "
+            f"{e['wall_s_mean']:.2f} / {e['wall_s_median']:.2f} | "
+            f"{e['robot_time_s_mean']:.2f} / {e['robot_time_s_median']:.2f} | "
+            f"{e['base_path_m_mean']:.2f} / {e['base_path_m_median']:.2f} | "
+            f"{e['straight_line_m_mean']:.2f} / {e['straight_line_m_median']:.2f} | "
+            f"{e['edit_vs_baseline']:.2f} | {e['order']} |")
+    lines.append("")
+    lines.append("Driven path: length of the base paths actually executed. Straight-line: sum "
+                 "over steps of the xy distances robot -> item -> where it was put. Robot time: "
+                 "wall time + driving time at 1.0 m/s.")
+    for test in tests:
+        lines += ["", f"Wilcoxon signed-rank, {test['strategy']} vs {test['reference']} "
+                      f"({test['pairs']} pairs by setup and trial):"]
+        for measure in MEASURES[1:]:
+            t = test.get(measure, {})
+            if t.get("p") is None:
+                lines.append(f"- {measure}: {t.get('note', 'n/a')}")
+                continue
+            per = t.get("per_setup")
+            per_text = (f"; per-setup means (n={per['n']}): W = {per['W']:.1f}, "
+                        f"p = {per['p']:.3g}") if per else ""
+            lines.append(f"- {measure}: mean {t['mean']:.2f} vs {t['reference_mean']:.2f}, "
+                         f"W = {t['W']:.1f}, p = {t['p']:.3g}{per_text}")
+    if percentiles:
+        lines += ["", "Among all fixed orders (percentage of orders with a lower value; "
+                      "0 % = best):"]
+        for e in percentiles:
+            lines.append(f"- {e['setup']} {e['strategy']}: driven path "
+                         f"{e['base_path_m_percentile']:.0f} %, straight-line "
+                         f"{e['straight_line_m_percentile']:.0f} %, robot time "
+                         f"{e['robot_time_s_percentile']:.0f} % of {e['orders']} orders")
+    text = "\n".join(lines) + "\n"
+    (folder / "summary.md").write_text(text)
+    (folder / "tests.json").write_text(json.dumps({"wilcoxon": tests,
+                                                   "all_orders": percentiles}, indent=2))
+    return text
