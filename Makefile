@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 run: $(STAMP)
-	$(BIN)/cramlite show v1 --out v1.png
+	$(BIN)/cramlite bench --out results
 
 test: $(STAMP)
 	$(BIN)/ruff check .

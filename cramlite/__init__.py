@@ -1,3 +1,41 @@
-"""cramlite: a lightweight, ROS-free robot plan executive in the style of PyCRAM."""
+"""cramlite: a lightweight, ROS-free robot plan executive in the style of PyCRAM.
+
+The public API is importable from here; names are loaded on first use, so that
+`from cramlite import make_strategy` does not import PyBullet (strategies and metrics
+stay free of it).
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
 
 __version__ = "0.1.0"
+
+_EXPORTS = {
+    # world
+    "World": "cramlite.world", "load_setup": "cramlite.world", "Setup": "cramlite.world",
+    # designators and execution
+    "simulated_robot": "cramlite.designators", "RobotContext": "cramlite.designators",
+    "ObjectDesignatorDescription": "cramlite.designators",
+    "CostmapLocation": "cramlite.designators", "PlacingLocation": "cramlite.designators",
+    "NavigateAction": "cramlite.designators", "PickUpAction": "cramlite.designators",
+    "PlaceAction": "cramlite.designators", "ParkArmsAction": "cramlite.designators",
+    "MoveTorsoAction": "cramlite.designators", "TransportAction": "cramlite.designators",
+    "PlanFailure": "cramlite.designators", "ProcessModules": "cramlite.designators",
+    "Sequential": "cramlite.designators", "TryInOrder": "cramlite.designators",
+    # strategies
+    "Strategy": "cramlite.strategies", "Candidate": "cramlite.strategies",
+    "make_strategy": "cramlite.strategies", "available_strategies": "cramlite.strategies",
+    # trials and evaluation
+    "TrialRunner": "cramlite.trial", "run_trial": "cramlite.trial",
+    "load_episodes": "cramlite.evaluation.data", "evaluate": "cramlite.evaluation.evaluate",
+}
+
+__all__ = ["__version__", *_EXPORTS]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
+    raise AttributeError(f"module 'cramlite' has no attribute {name!r}")

@@ -174,3 +174,14 @@ def test_bad_names_and_params() -> None:
     with pytest.raises(StrategyError, match="dims must be one of"):
         make_strategy("opm", dims="xyzw")
     assert OPMParams.from_mapping({"c": 1.4}).c == 1.4
+
+
+def test_strategies_and_metrics_do_not_import_pybullet() -> None:
+    import subprocess
+    import sys
+    code = ("import sys, cramlite\n"
+            "from cramlite import make_strategy\n"
+            "from cramlite.strategies.service import answer\n"
+            "from cramlite.evaluation.fit import fit\n"
+            "assert 'pybullet' not in sys.modules, sorted(m for m in sys.modules if 'bullet' in m)")
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True).returncode == 0

@@ -198,14 +198,16 @@ class TransportAction:
     def perform(self, ctx: RobotContext) -> None:
         obj = as_object(self.object, ctx)
         ParkArmsAction().perform(ctx)
-        (origin, _), picked_from = obj.pose(ctx), self._fetch(ctx, obj)
+        origin, _ = obj.pose(ctx)
+        picked_from, planned = self._fetch(ctx, obj)
         try:
-            self._deliver(ctx, obj)
+            self._deliver(ctx, obj, planned)
         except PlanFailure:
             self._put_back(ctx, obj, origin, picked_from)
             raise
 
-    def _fetch(self, ctx: RobotContext, obj: ObjectDesignator) -> ReachablePose:
+    def _fetch(self, ctx: RobotContext, obj: ObjectDesignator,
+               ) -> tuple[ReachablePose, tuple[Vec3, ReachablePose]]:
         """Navigate and pick up, trying base poses best first; an arm and grasp that could
         not put the object down at the goal are not used."""
         (x, y, z), _ = obj.pose(ctx)
@@ -216,16 +218,22 @@ class TransportAction:
         arms = [a for a in (self.arms or ARMS) if a not in ctx.holding]
         location = CostmapLocation((x, y, z), {g: grasp_height_m(g, height) for g in grasps},
                                    arms, ignore=[obj.name])
-        deliverable: dict[tuple[str, str], bool] = {}
+        _, orientation = obj.pose(ctx)
+        round_object = obj.is_round(ctx)
+        deliverable: dict[tuple[str, str, int], tuple[Vec3, ReachablePose] | None] = {}
         attempts = 0
         for reach in location.ground(ctx):
-            combo = (reach.arm, reach.grasp)
+            # put down from base yaw psi, the object will stand at psi + yaw_offset
+            yaw_offset = quat_yaw(orientation) - reach.base[2]
+            combo = (reach.arm, reach.grasp, 0 if round_object else round(yaw_offset * 18))
             if combo not in deliverable:
-                deliverable[combo] = self._can_deliver(ctx, obj, reach.arm, reach.grasp, height)
-                if not deliverable[combo]:
+                deliverable[combo] = self._plan_delivery(ctx, obj, reach.arm, reach.grasp,
+                                                         height, yaw_offset)
+                if deliverable[combo] is None:
                     tried.append(f"{reach.arm} arm {reach.grasp} grasp: could not put it down "
                                  "at the goal")
-            if not deliverable[combo]:
+            planned = deliverable[combo]
+            if planned is None:
                 continue
             if attempts >= ctx.options.max_candidates:
                 break
@@ -234,7 +242,7 @@ class TransportAction:
                 NavigateAction(reach.base).perform(ctx)
                 PickUpAction(obj, reach=reach).perform(ctx)
                 ctx.note(f"picked {obj.name} from {reach.describe()}")
-                return reach
+                return reach, planned
             except PlanFailure as failure:
                 tried.append(f"{reach.describe()}: {failure.kind}: {failure.reason}")
                 last = failure
@@ -249,22 +257,26 @@ class TransportAction:
             else "no base pose from which an arm reaches it")
         raise cls(reason, obj=obj.name, tried=tried)
 
-    def _can_deliver(self, ctx: RobotContext, obj: ObjectDesignator, arm: str, grasp: str,
-                     height: float) -> bool:
-        """Is there a base pose from which `arm` puts the object down at (one of the first
-        few free spots of) the goal with `grasp`?"""
+    def _plan_delivery(self, ctx: RobotContext, obj: ObjectDesignator, arm: str, grasp: str,
+                       height: float, yaw_offset: float) -> tuple[Vec3, ReachablePose] | None:
+        """A spot of the goal (among its first few free ones) and a base pose from which
+        `arm` puts the object down there with `grasp`, clear of its neighbours."""
         placing = PlacingLocation(obj, target=self.target, surface=self.surface,
                                   preferred=self.preferred)
         for index, spot in enumerate(placing.ground(ctx)):
             location = CostmapLocation(spot, {grasp: grasp_height_m(grasp, height)}, [arm],
                                        ignore=[obj.name], max_ik_checks=12)
-            if next(iter(location.ground(ctx)), None) is not None:
-                return True
+            for reach in location.ground(ctx):
+                if placing.is_free(ctx, spot, reach.base[2] + yaw_offset):
+                    return spot, reach
             if index >= 2:
-                return False
-        return False
+                return None
+        return None
 
-    def _deliver(self, ctx: RobotContext, obj: ObjectDesignator) -> None:
+    def _deliver(self, ctx: RobotContext, obj: ObjectDesignator,
+                 planned: tuple[Vec3, ReachablePose] | None = None) -> None:
+        """Navigate and place: first where the fetch step found it can, then other spots
+        and base poses, best first."""
         arm = next(a for a, h in ctx.holding.items() if h.obj == obj.name)
         holding = ctx.holding[arm]
         placing = PlacingLocation(obj, target=self.target, surface=self.surface,
@@ -272,6 +284,21 @@ class TransportAction:
         tried: list[str] = []
         last: PlanFailure | None = None
         attempts = 0
+        if planned is not None:
+            spot, reach = planned
+            attempts += 1
+            try:
+                NavigateAction(reach.base).perform(ctx)
+                PlaceAction(obj, spot, reach=reach).perform(ctx)
+                ctx.note(f"placed {obj.name} at ({spot[0]:.2f}, {spot[1]:.2f}) from "
+                         f"{reach.describe()}")
+                return
+            except PlanFailure as failure:
+                tried.append(f"spot ({spot[0]:.2f}, {spot[1]:.2f}) from {reach.describe()}: "
+                             f"{failure.kind}: {failure.reason}")
+                last = failure
+                if isinstance(failure, PlacementFailed):
+                    raise PlacementFailed(failure.reason, obj=obj.name, tried=tried) from None
         for spot in placing.ground(ctx):
             location = CostmapLocation(spot, {holding.grasp: holding.grasp_height_m}, [arm],
                                        ignore=[obj.name], max_ik_checks=12)

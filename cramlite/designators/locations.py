@@ -207,7 +207,10 @@ class PlacingLocation:
                 yield spot
 
     def is_free(self, ctx: RobotContext, spot: Vec3, yaw: float) -> bool:
-        """Does the object, put at `spot` with `yaw`, keep clear of every other item?"""
+        """Does the object, put at `spot` with `yaw`, keep clear of every other item?
+        (A round object's yaw does not matter.)"""
+        if self.obj.is_round(ctx):
+            yaw = 0.0
         mine = rectangle(spot[:2], object_size(ctx, self.obj.name), yaw)
         return not any(rectangles_overlap(mine, other, self.clearance_m)
                        for other in self._others(ctx))
@@ -218,20 +221,15 @@ class PlacingLocation:
             if name == self.obj.name or name in held(ctx):
                 continue
             (x, y, _), orn = obj.pose()
-            out.append(rectangle((x, y), object_size(ctx, name), quat_yaw(orn)))
+            yaw = 0.0 if obj.is_round() else quat_yaw(orn)
+            out.append(rectangle((x, y), object_size(ctx, name), yaw))
         return out
 
 
 def object_size(ctx: RobotContext, name: str) -> tuple[float, float]:
-    """Footprint (x, y extent in the object's own frame) from its collision shape."""
-    obj = ctx.world.objects[name]
-    shapes = p.getCollisionShapeData(obj.body, -1, physicsClientId=ctx.world.client)
-    if len(shapes) == 1 and shapes[0][2] == p.GEOM_BOX:
-        return float(shapes[0][3][0]), float(shapes[0][3][1])
-    if len(shapes) == 1 and shapes[0][2] == p.GEOM_CYLINDER:
-        return 2 * float(shapes[0][3][1]), 2 * float(shapes[0][3][1])
-    lo, hi = obj.aabb()
-    return hi[0] - lo[0], hi[1] - lo[1]
+    """Footprint (x, y extent in the object's own frame), however it is held now."""
+    extents = ctx.world.objects[name].extents
+    return extents[0], extents[1]
 
 
 def rectangle(centre: Sequence[float], size: tuple[float, float], yaw: float) -> np.ndarray:

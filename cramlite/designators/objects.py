@@ -23,10 +23,14 @@ class ObjectDesignator:
     def height_m(self, ctx: RobotContext) -> float:
         return ctx.world.objects[self.name].height()
 
+    def is_round(self, ctx: RobotContext) -> bool:
+        """A cylinder: turning it about its axis changes nothing."""
+        return ctx.world.objects[self.name].is_round()
+
     def radius_m(self, ctx: RobotContext) -> float:
         """Half the diagonal of the object's footprint (a circle that covers it)."""
-        lo, hi = ctx.world.objects[self.name].aabb()
-        return 0.5 * float(((hi[0] - lo[0]) ** 2 + (hi[1] - lo[1]) ** 2) ** 0.5)
+        x, y, _ = ctx.world.objects[self.name].extents
+        return 0.5 * float((x**2 + y**2) ** 0.5)
 
 
 @dataclass(frozen=True)

@@ -33,6 +33,8 @@ class WorldObject:
     body: int
     client: int
     spec: ItemSpec | None = None
+    #: Size (x, y, z) of the upright item in its own frame, measured when it was loaded.
+    extents: Vec3 = (0.0, 0.0, 0.0)
     _inertial: tuple[Vec3, Quat] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
 
     def __post_init__(self) -> None:
@@ -58,9 +60,14 @@ class WorldObject:
         lo, hi = p.getAABB(self.body, -1, physicsClientId=self.client)
         return tuple(lo), tuple(hi)
 
+    def is_round(self) -> bool:
+        """A single upright cylinder (its footprint does not change with yaw)."""
+        shapes = p.getCollisionShapeData(self.body, -1, physicsClientId=self.client)
+        return len(shapes) == 1 and shapes[0][2] == p.GEOM_CYLINDER
+
     def height(self) -> float:
-        lo, hi = self.aabb()
-        return hi[2] - lo[2]
+        """Height of the upright item (however it is tilted now, e.g. in a gripper)."""
+        return self.extents[2]
 
 
 class RobotBody:

@@ -107,9 +107,10 @@ class World:
             obj.set_pose(spec.pose.xyz, yaw_quat(spec.pose.yaw))
         self.check_setup_geometry(setup)
 
-    def _load_urdf(self, path: Path, fixed: bool) -> int:
+    def _load_urdf(self, path: Path, fixed: bool, flags: int = 0) -> int:
         with c_stdout_silenced():
-            body = p.loadURDF(str(path), useFixedBase=fixed, physicsClientId=self.client)
+            body = p.loadURDF(str(path), useFixedBase=fixed, flags=flags,
+                              physicsClientId=self.client)
         if body < 0:
             raise SetupError("PyBullet could not load this URDF", source=str(path))
         return body
@@ -128,8 +129,11 @@ class World:
         return self.robot
 
     def add_object(self, name: str, type_: str, urdf: Path) -> WorldObject:
-        body = self._load_urdf(urdf, fixed=False)
-        obj = WorldObject(name=name, type=type_, body=body, client=self.client)
+        # real cylinders (PyBullet would otherwise turn them into meshes)
+        body = self._load_urdf(urdf, fixed=False, flags=p.URDF_USE_IMPLICIT_CYLINDER)
+        lo, hi = p.getAABB(body, -1, physicsClientId=self.client)  # upright, at the origin
+        obj = WorldObject(name=name, type=type_, body=body, client=self.client,
+                          extents=(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]))
         self.objects[name] = obj
         return obj
 
