@@ -156,3 +156,13 @@ def test_evaluate_cli_json_and_bad_arguments(tmp_path: Path) -> None:
         bad = run_cli("evaluate", str(path), *args)
         assert bad.returncode == 2, args
         assert "Traceback" not in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+
+
+def test_random_edit_baseline_matches_the_published_column() -> None:
+    episodes, _ = load_episodes(DATA)
+    ours = np.array([random_edit(e)[0] for e in episodes])
+    published = np.array([e.published_baseline for e in episodes])
+    close = np.abs(ours - published) < 0.006  # published to 3 decimals (4/9 as 0.44)
+    print("matching", close.sum(), "of", len(episodes))
+    assert close.sum() >= 175
+    assert random_edit(episodes[0])[0] == pytest.approx(0.7236, abs=1e-3)  # 6 items
