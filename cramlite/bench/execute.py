@@ -93,25 +93,15 @@ def run_batch(specs: list[TrialSpec], record: Callable[[dict[str, Any]], None],
         outcome.failed += row.get("success") is not True
         record(row)
 
-    suspects: list[TrialSpec] = []
-    with open_executor(executor_kind, workers, scheduler) as executor:
-        try:
-            suspects = _drain(executor, pending, workers, keep)
-        except KeyboardInterrupt:
-            outcome.interrupted = True
-            return outcome
-    while suspects or pending:
-        # a worker died: isolate the trials that were in flight, then go on
-        for spec in suspects:
-            _run_isolated(spec, keep, outcome)
-        suspects = []
-        if pending:
+    try:
+        while pending:
             with open_executor(executor_kind, workers, scheduler) as executor:
-                try:
-                    suspects = _drain(executor, pending, workers, keep)
-                except KeyboardInterrupt:
-                    outcome.interrupted = True
-                    return outcome
+                suspects = _drain(executor, pending, workers, keep)
+            # a worker died: run the trials that were in flight one by one, then go on
+            for spec in suspects:
+                _run_isolated(spec, keep, outcome)
+    except KeyboardInterrupt:
+        outcome.interrupted = True
     return outcome
 
 

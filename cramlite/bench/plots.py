@@ -59,22 +59,14 @@ def write_plots(rows: Sequence[dict[str, Any]], folder: Path) -> list[Path]:
                    for j in range(len(strategies))]
         ax.legend(handles, strategies, loc="best")
         ax.set_title(f"{LABELS[measure].split(' (')[0]} per setup and strategy")
-        fig.tight_layout()
-        path = folder / f"{measure}_by_setup.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        written.append(path)
+        written.append(_save(fig, folder / f"{measure}_by_setup.png"))
 
         fig, ax = plt.subplots(figsize=(2 + 1.5 * len(strategies), 4.5))
         ax.boxplot([_values(rows, None, s, measure) for s in strategies],
                    tick_labels=strategies, showmeans=True)
         ax.set_ylabel(LABELS[measure])
         ax.set_title(f"all setups ({LABELS[measure].split(' (')[0]})")
-        fig.tight_layout()
-        path = folder / f"{measure}_aggregated.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        written.append(path)
+        written.append(_save(fig, folder / f"{measure}_aggregated.png"))
 
     ordered = sorted({r["setup"] for r in rows if r["strategy"] == FIXED_ORDER})
     if ordered:
@@ -92,9 +84,14 @@ def write_plots(rows: Sequence[dict[str, Any]], folder: Path) -> list[Path]:
             ax.set_xlabel("driven base path (m)")
         axes[0][0].set_ylabel("orders")
         axes[0][-1].legend(loc="best")
-        fig.tight_layout()
-        path = folder / "all_orders_base_path.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        written.append(path)
+        written.append(_save(fig, folder / "all_orders_base_path.png"))
     return written
+
+
+def _save(fig: Any, path: Path) -> Path:
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -10,7 +10,7 @@ lists what was tried.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from cramlite.designators.context import Holding, RobotContext
@@ -278,15 +278,15 @@ class TransportAction:
         """Navigate and place: first where the fetch step found it can, then other spots
         and base poses, best first."""
         arm = next(a for a, h in ctx.holding.items() if h.obj == obj.name)
-        holding = ctx.holding[arm]
-        placing = PlacingLocation(obj, target=self.target, surface=self.surface,
-                                  preferred=self.preferred)
         tried: list[str] = []
         last: PlanFailure | None = None
-        attempts = 0
-        if planned is not None:
-            spot, reach = planned
-            attempts += 1
+        for attempt, (spot, reach) in enumerate(self._place_candidates(ctx, obj, arm, planned)):
+            if attempt >= ctx.options.max_candidates:
+                break
+            where = f"spot ({spot[0]:.2f}, {spot[1]:.2f})"
+            if reach is None:
+                tried.append(f"{where}: no reachable base pose")
+                continue
             try:
                 NavigateAction(reach.base).perform(ctx)
                 PlaceAction(obj, spot, reach=reach).perform(ctx)
@@ -294,41 +294,33 @@ class TransportAction:
                          f"{reach.describe()}")
                 return
             except PlanFailure as failure:
-                tried.append(f"spot ({spot[0]:.2f}, {spot[1]:.2f}) from {reach.describe()}: "
-                             f"{failure.kind}: {failure.reason}")
+                tried.append(f"{where} from {reach.describe()}: {failure.kind}: {failure.reason}")
                 last = failure
                 if isinstance(failure, PlacementFailed):
-                    raise PlacementFailed(failure.reason, obj=obj.name, tried=tried) from None
+                    break  # it is no longer in hand
+        reason = last.reason if last is not None else "no reachable free place"
+        raise PlacementFailed(reason, obj=obj.name, tried=tried)
+
+    def _place_candidates(self, ctx: RobotContext, obj: ObjectDesignator, arm: str,
+                          planned: tuple[Vec3, ReachablePose] | None,
+                          ) -> Iterator[tuple[Vec3, ReachablePose | None]]:
+        """(spot, base pose) to try, best first: the plan from the fetch step, then each
+        free spot with its base poses (None: the spot has no reachable one)."""
+        if planned is not None:
+            yield planned
+        holding = ctx.holding[arm]
+        placing = PlacingLocation(obj, target=self.target, surface=self.surface,
+                                  preferred=self.preferred)
         for spot in placing.ground(ctx):
             location = CostmapLocation(spot, {holding.grasp: holding.grasp_height_m}, [arm],
                                        ignore=[obj.name], max_ik_checks=12)
+            found = False
             for reach in location.ground(ctx):
-                if not placing.is_free(ctx, spot, reach.base[2] + holding.yaw_offset):
-                    continue  # put down from there, it would touch a neighbour
-                attempts += 1
-                try:
-                    NavigateAction(reach.base).perform(ctx)
-                    PlaceAction(obj, spot, reach=reach).perform(ctx)
-                    ctx.note(f"placed {obj.name} at ({spot[0]:.2f}, {spot[1]:.2f}) from "
-                             f"{reach.describe()}")
-                    return
-                except PlanFailure as failure:
-                    tried.append(f"spot ({spot[0]:.2f}, {spot[1]:.2f}) from {reach.describe()}: "
-                                 f"{failure.kind}: {failure.reason}")
-                    last = failure
-                    if isinstance(failure, PlacementFailed):
-                        break  # it is no longer in hand
-                if attempts >= ctx.options.max_candidates:
-                    break
-            if attempts >= ctx.options.max_candidates or obj.name not in \
-                    {h.obj for h in ctx.holding.values()}:
-                break
-            tried.append(f"spot ({spot[0]:.2f}, {spot[1]:.2f}): no reachable base pose")
-            attempts += 1
-            if attempts >= ctx.options.max_candidates:
-                break
-        reason = last.reason if last is not None else "no reachable free place"
-        raise PlacementFailed(reason, obj=obj.name, tried=tried)
+                if placing.is_free(ctx, spot, reach.base[2] + holding.yaw_offset):
+                    found = True  # else, put down from there, it would touch a neighbour
+                    yield spot, reach
+            if not found:
+                yield spot, None
 
     def _put_back(self, ctx: RobotContext, obj: ObjectDesignator, origin: Vec3,
                   picked_from: ReachablePose) -> None:
