@@ -15,12 +15,12 @@ from typing import Any
 import numpy as np
 
 from cramlite.designators import ExecutionOptions, RobotContext, SimulatedProcessModules
+from cramlite.plan_names import PLAN_NAMES  # noqa: F401  (re-exported)
 from cramlite.strategies import make_strategy
 from cramlite.world.bodies import yaw_quat
 from cramlite.world.setup import Setup, load_setup
 from cramlite.world.world import World
 
-PLAN_NAMES = ("set-table", "clear-table")
 RESTING_TOLERANCE_M = 0.01
 
 

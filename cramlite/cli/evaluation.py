@@ -1,0 +1,158 @@
+"""`cramlite evaluate` and `cramlite fit`: strategies against human sequences."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from cramlite.cli.common import (
+    EXIT_OK,
+    non_negative_int,
+    parse_params,
+    positive_int,
+    progress_bar,
+    strategy_checked,
+)
+from cramlite.errors import UserInputError
+from cramlite.evaluation.evaluate import METRICS
+from cramlite.strategies.cost import DIMS
+
+
+def _load_episodes(args: argparse.Namespace):
+    from cramlite.evaluation.data import load_episodes
+
+    episodes, bad = load_episodes(args.data, on_bad_row=args.on_bad_row)
+    for row in bad:
+        print(f"cramlite {args.command}: skipped {args.data}: {row}", file=sys.stderr)
+    if not episodes:
+        raise UserInputError("no usable episodes", source=args.data)
+    return episodes, bad
+
+
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    import json
+
+    from cramlite.evaluation.evaluate import evaluate
+
+    params = parse_params(args.params)
+    strategy_checked(args.strategy, params=params, dims=args.dims, form=args.form)
+    episodes, bad = _load_episodes(args)
+    try:
+        with progress_bar(len(episodes), "evaluate") as bar:
+            result = evaluate(episodes, args.strategy, params, args.dims, args.form, args.metric,
+                              args.repeats, args.seed, progress=bar.update)
+    except ValueError as exc:  # e.g. expected-ape with a strategy that has memory
+        raise UserInputError(str(exc), field="--metric") from None
+    report = result.as_dict()
+    report["skipped"] = [{"id": b.id, "reason": f"{b.field}: {b.message}"} for b in bad] + \
+        report["skipped"]
+    for item in result.skipped:
+        print(f"cramlite evaluate: skipped episode {item[0]}: {item[1]}", file=sys.stderr)
+    if args.json:
+        print(json.dumps(report))
+        return EXIT_OK
+    print(f"{'episode':<12} {'activity':<14} {'steps':>5} {args.metric:>12} {'random':>8}")
+    for row in report["per_episode"]:
+        print(f"{row['id']:<12} {row['activity']:<14} {row['length']:>5} {row['score']:>12.3f} "
+              f"{row['random_baseline']:>8.3f}")
+    print(f"\n{args.strategy} ({args.dims}, {args.form}) on {report['episodes']} episodes, "
+          f"metric {args.metric}: mean {report['mean']:.3f}, median {report['median']:.3f}")
+    for activity, summary in report["by_activity"].items():
+        print(f"  {activity}: {summary['episodes']} episodes, mean {summary['mean']:.3f}, "
+              f"median {summary['median']:.3f}")
+    base = report["random_baseline"]
+    print(f"  random order ({'exact' if base['exact'] else 'sampled'}): mean {base['mean']:.3f},"
+          f" median {base['median']:.3f}")
+    return EXIT_OK
+
+
+def cmd_fit(args: argparse.Namespace) -> int:
+    import json
+    from pathlib import Path
+
+    from cramlite.evaluation.evaluate import baseline_score, episode_rng
+    from cramlite.evaluation.fit import fit, source_grid
+    from cramlite.evaluation.report import write_fit
+    from cramlite.strategies import DIMS
+
+    dims = [d.strip() for d in args.dims.split(",") if d.strip()]
+    for d in dims:
+        if d not in DIMS:
+            raise UserInputError(f"unknown projection {d!r}; expected a comma-separated list "
+                                 f"of {', '.join(DIMS)}", field="--dims")
+    strategy_checked(args.strategy, form=args.form)
+    episodes, _ = _load_episodes(args)
+    configs = source_grid(independent_mid=args.independent_mid)
+    try:
+        with progress_bar(len(episodes) * len(dims), f"fit {args.strategy}") as bar:
+            result = fit(episodes, args.strategy, dims, args.metric, args.repeats, args.seed,
+                         args.form, configs, progress=bar.update)
+    except ValueError as exc:
+        raise UserInputError(str(exc), field="--metric") from None
+    baselines = [baseline_score(ep, args.metric, episode_rng(args.seed, i))[0]
+                 for i, ep in enumerate(episodes)]
+    summary = write_fit(result, baselines, Path(args.out))
+    if args.json:
+        print(json.dumps(summary))
+        return EXIT_OK
+    print(f"{args.strategy} fit on {len(episodes)} episodes, metric {args.metric}, "
+          f"{summary['grid_points']} grid points per projection")
+    for d, row in summary["by_projection"].items():
+        params = ", ".join(f"{k}={v:.1f}" for k, v in row["params"].items())
+        print(f"  {d:<4} best {params}: mean {row['mean']:.3f}, median {row['median']:.3f}")
+    best = summary["best"]
+    print(f"best: {best['dims']} mean {best['mean']:.3f}")
+    if "source_params" in summary:
+        src = summary["source_params"]
+        print(f"source's parameters (0.2/0.3/1.2/1.7, {src['dims']}): mean {src['mean']:.3f}; "
+              f"Wilcoxon vs best p = {src['test_vs_best']['p']:.3g}")
+    tests = summary["tests_between_projections"]
+    for pair, res in tests.get("wilcoxon", {}).items():
+        print(f"  Wilcoxon {pair}: W = {res['statistic']}, p = {res['p']:.3g}")
+    if "friedman" in tests:
+        fr = tests["friedman"]
+        print(f"  Friedman over {len(fr['groups'])} projections: chi2 = {fr['statistic']:.3f}, "
+              f"p = {fr['p']:.3g}")
+    for kind, path in summary["files"].items():
+        print(f"wrote {kind}: {path}")
+    return EXIT_OK
+
+
+
+def _add_data_arguments(p: argparse.ArgumentParser, metrics: tuple[str, ...]) -> None:
+    from cramlite.strategies import FORMS
+
+    p.add_argument("data", help="CSV of recorded sequences (the published OPM format)")
+    p.add_argument("--strategy", default="opm", help="strategy name (see `cramlite strategies`)")
+    p.add_argument("--metric", default="ape", choices=metrics,
+                   help="ape: sampled APE (median over repeats); expected-ape: its exact "
+                        "expectation; edit / edit-unrestricted: normalised Damerau-Levenshtein")
+    p.add_argument("--form", default="power", choices=FORMS, help="functional form (Eq. 3.1-3.3)")
+    p.add_argument("--repeats", type=positive_int, default=100,
+                   help="repeats of the random tie-breaks (default 100)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
+    p.add_argument("--on-bad-row", choices=("fail", "skip"), default="fail",
+                   help="a row that cannot be used: stop (default) or skip and report it")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    evaluate = sub.add_parser("evaluate", help="score a strategy against human sequences")
+    _add_data_arguments(evaluate, METRICS)
+    evaluate.add_argument("--params", help="e.g. strong_k=0.2,mid_k=0.3,food_k=1.2,c=1.7")
+    evaluate.add_argument("--dims", default="xy", choices=list(DIMS), help="projection")
+    evaluate.set_defaults(func=cmd_evaluate)
+
+    fit_cmd = sub.add_parser("fit", help="grid-search a strategy's parameters (Table 3.4)")
+    _add_data_arguments(fit_cmd, METRICS)
+    fit_cmd.add_argument("--dims", default="xy,xyz",
+                         help="comma-separated projections to fit (default xy,xyz)")
+    fit_cmd.add_argument("--independent-mid", action="store_true",
+                         help="grid mid k independently (0.1-1.0) instead of strong k + 0.1")
+    fit_cmd.add_argument("--out", default="fit-results",
+                         help="folder for surface.csv, fit.json, error_by_projection.png")
+    fit_cmd.set_defaults(func=cmd_fit)
