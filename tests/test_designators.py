@@ -107,6 +107,21 @@ def test_motions_move_attached_objects_with_the_gripper(world) -> None:
         assert moved[2] == pytest.approx(0.2, abs=1e-3)
 
 
+def test_move_tcp_motion_reaches_a_pose_or_fails_typed(world) -> None:
+    import pinocchio as pin
+
+    from cramlite.designators import MoveTCPMotion
+
+    with simulated_robot(world) as ctx:
+        world.robot.set_base_pose(0.0, 0.0, 0.0)
+        target = pin.SE3(np.eye(3), np.array([0.6, -0.2, 1.0]))
+        MoveTCPMotion("right", target).perform(ctx)
+        tool, _ = world.robot.link_pose(tool_frame("right"))
+        assert tool == pytest.approx((0.6, -0.2, 1.0), abs=2e-3)
+        with pytest.raises(ObjectUnreachable, match="no IK solution"):
+            MoveTCPMotion("right", pin.SE3(np.eye(3), np.array([2.0, 0.0, 1.0]))).perform(ctx)
+
+
 def test_actions_pick_and_place_step_by_step(world) -> None:
     with simulated_robot(world, seed=3) as ctx:
         ParkArmsAction().perform(ctx)

@@ -27,6 +27,7 @@ from cramlite.designators.motions import (
     MoveArmJointsMotion,
     MoveGripperMotion,
     MoveMotion,
+    MoveTCPMotion,
     MoveTorsoMotion,
 )
 from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription
@@ -34,7 +35,8 @@ from cramlite.designators.process_modules import ProcessModules, SimulatedProces
 
 __all__ = [
     "AttachMotion", "CostmapLocation", "DetachMotion", "ExecutionOptions", "GraspFailed",
-    "IKFailed", "MoveArmJointsMotion", "MoveGripperMotion", "MoveMotion", "MoveTorsoAction",
+    "IKFailed", "MoveArmJointsMotion", "MoveGripperMotion", "MoveMotion", "MoveTCPMotion",
+    "MoveTorsoAction",
     "MoveTorsoMotion", "NavigateAction", "NavigationFailed", "NoPathFound", "ObjectDesignator",
     "ObjectDesignatorDescription", "ObjectNotFound", "ObjectUnreachable", "ParkArmsAction",
     "PickUpAction", "PlaceAction", "PlacementFailed", "PlacingLocation", "PlanFailure",

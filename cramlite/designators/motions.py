@@ -5,8 +5,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import pinocchio as pin
+
 from cramlite.designators.context import RobotContext
+from cramlite.designators.failures import ObjectUnreachable
+from cramlite.designators.grasps import in_base_frame
 from cramlite.motion.base_planner import path_length_m
+from cramlite.motion.ik import arm_ik
 
 BasePose = tuple[float, float, float]
 
@@ -30,6 +35,25 @@ class MoveArmJointsMotion:
 
     def perform(self, ctx: RobotContext) -> None:
         ctx.modules.move_joints(dict(self.joints))
+
+
+@dataclass(frozen=True)
+class MoveTCPMotion:
+    """Move an arm's tool frame to a pose in the world (x, y, z, rotation) via IK."""
+
+    arm: str
+    pose: pin.SE3  #: target of the tool frame, world coordinates
+
+    def perform(self, ctx: RobotContext) -> None:
+        ik = arm_ik(self.arm)
+        target = in_base_frame(self.pose, ctx.modules.base_pose())
+        seed = ctx.modules.joint_positions(ik.joint_names)
+        solution = ik.solve(target, ctx.rng, seed)
+        if solution is None:
+            x, y, z = self.pose.translation
+            raise ObjectUnreachable(f"no IK solution for the {self.arm} tool frame at "
+                                    f"({x:.2f}, {y:.2f}, {z:.2f}) from here")
+        MoveArmJointsMotion(solution.joints).perform(ctx)
 
 
 @dataclass(frozen=True)
