@@ -48,10 +48,21 @@ def neutral_order(episode: Episode) -> list[int]:
     return sorted(range(len(items)), key=lambda j: (items[j].name, items[j].position, j))
 
 
-def _step_candidates(episode: Episode, remaining: Sequence[int], step: int) -> list[Candidate]:
+@functools.lru_cache(maxsize=512)
+def _lookahead_items(episode: Episode) -> tuple[tuple[Candidate, ...], ...]:
+    """Per step, every item with `then_at` = where the subject stood before the next step
+    (built once per episode: repeats and grid points reuse it)."""
     items = episode.sequence_items()
-    then_at = episode.start_positions[step + 1] if step + 1 < len(episode) else None
-    return [replace(items[j], then_at=then_at) for j in remaining]
+    out = []
+    for step in range(len(episode)):
+        then_at = episode.start_positions[step + 1] if step + 1 < len(episode) else None
+        out.append(tuple(replace(item, then_at=then_at) for item in items))
+    return tuple(out)
+
+
+def _step_candidates(episode: Episode, remaining: Sequence[int], step: int) -> list[Candidate]:
+    at_step = _lookahead_items(episode)[step]
+    return [at_step[j] for j in remaining]
 
 
 def correct_probabilities(strategy: Strategy, episode: Episode) -> list[float]:
