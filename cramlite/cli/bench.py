@@ -73,8 +73,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
     todo = [spec for spec in specs if spec.key not in done]
     workers = args.workers or os.cpu_count() or 1
     store.write_metadata({k: v for k, v in vars(args).items() if k != "func"}, args.executor)
+    where = (f"Dask scheduler {args.scheduler}, {2 * workers} trials in flight" if args.scheduler
+             else f"{workers} worker(s), executor {args.executor}")
     print(f"bench: {len(specs)} trials ({len(specs) - len(todo)} already in {store.path}), "
-          f"{workers} worker(s), executor {args.executor}", file=sys.stderr)
+          f"{where}", file=sys.stderr)
     progress = Progress(len(todo), already=len(specs) - len(todo))
 
     def record(row: dict) -> None:
@@ -126,7 +128,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="batch seed; each trial's seed derives from it, the setup and "
                             "the trial index")
     bench.add_argument("--workers", type=positive_int, default=None,
-                       help="worker processes (default: number of CPUs)")
+                       help="worker processes (default: number of CPUs); with --scheduler, "
+                            "half the number of trials kept in flight on the cluster")
     bench.add_argument("--executor", choices=EXECUTORS, default="local",
                        help="local process pool (default) or a Dask cluster")
     bench.add_argument("--scheduler", help="Dask scheduler address (default: a local cluster)")

@@ -38,7 +38,7 @@ from cramlite.designators.motions import (
     MoveTorsoMotion,
 )
 from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription, as_object
-from cramlite.motion.ik import ARMS, arm_ik, tool_frame
+from cramlite.motion.ik import ARMS, arm_ik
 from cramlite.world.bodies import quat_yaw
 from cramlite.world.pr2 import PARK_JOINTS
 
@@ -106,7 +106,7 @@ class PickUpAction:
         MoveArmJointsMotion(reach.joints).perform(ctx)
         (bx, by, bz), _ = obj.pose(ctx)
         height = obj.height_m(ctx)
-        tool, _ = ctx.world.robot.link_pose(tool_frame(reach.arm))
+        tool, _ = ctx.modules.tool_pose(reach.arm)
         expected = (bx, by, bz + grasp_height_m(reach.grasp, height))
         if math.dist(tool, expected) > GRASP_CHECK_M:
             MoveArmJointsMotion(reach.pre_joints).perform(ctx)

@@ -55,6 +55,10 @@ class ProcessModules(ABC):
     def object_pose(self, obj: str) -> tuple[Vec3, Quat]:
         """Where an object is (perception on a real robot)."""
 
+    @abstractmethod
+    def tool_pose(self, arm: str) -> tuple[Vec3, Quat]:
+        """Where a gripper's tool frame is (forward kinematics of the measured joints)."""
+
 
 GRIPPER_JOINTS = ("gripper_l_finger_joint", "gripper_r_finger_joint",
                   "gripper_l_finger_tip_joint", "gripper_r_finger_tip_joint")
@@ -119,6 +123,9 @@ class SimulatedProcessModules(ProcessModules):
 
     def object_pose(self, obj: str) -> tuple[Vec3, Quat]:
         return self.world.objects[obj].pose()
+
+    def tool_pose(self, arm: str) -> tuple[Vec3, Quat]:
+        return self.robot.link_pose(tool_frame(arm))
 
     def _carry(self) -> None:
         for obj, (arm, relative, _) in self._attached.items():
