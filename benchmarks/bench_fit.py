@@ -9,15 +9,14 @@ from __future__ import annotations
 import argparse
 import statistics
 import time
-from pathlib import Path
 
 from tqdm import tqdm
 
 from cramlite.evaluation.data import load_episodes
 from cramlite.evaluation.fit import fit
+from cramlite.resources import shipped_data_path
 
-DATA = Path(__file__).resolve().parents[1] / "data" / "human_sequences" / \
-    "table_setting_sequences.csv"
+DATA = shipped_data_path("table-setting")
 
 
 def main() -> None:

@@ -68,7 +68,7 @@ class TrialRunner:
             params: dict[str, float] | None = None, dims: str = "xy",
             order: list[str] | None = None) -> TrialResult:
         """One trial; `order` replaces the setup's baseline order (for `baseline`)."""
-        from plans import PLANS
+        from cramlite.plans import PLANS
 
         if plan not in PLANS:
             raise ValueError(f"unknown plan {plan!r}; expected one of {', '.join(PLANS)}")

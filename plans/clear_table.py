@@ -6,11 +6,12 @@ differ (a surface instead of a target; the item's spot in the setup is preferred
 
 from __future__ import annotations
 
+from cramlite.plans.report import PlanReport
+from cramlite.plans.set_table import fetch_in_strategy_order
+
 from cramlite.designators import RobotContext
 from cramlite.strategies import Strategy
 from cramlite.world.setup import Setup
-from plans.report import PlanReport
-from plans.set_table import fetch_in_strategy_order
 
 COUNTER = "counter"
 

@@ -7,6 +7,8 @@ question) and transport it. A failed item is reported and the plan goes on.
 
 from __future__ import annotations
 
+from cramlite.plans.report import PlanReport
+
 from cramlite.designators import (
     MoveTorsoAction,
     ObjectDesignatorDescription,
@@ -18,7 +20,6 @@ from cramlite.designators import (
 from cramlite.strategies import Candidate, Strategy
 from cramlite.world.pr2 import TORSO_UP_M
 from cramlite.world.setup import Setup
-from plans.report import PlanReport
 
 
 def item_candidate(ctx: RobotContext, setup: Setup, name: str,

@@ -20,11 +20,11 @@ from cramlite.evaluation.metrics import (
     random_edit,
     sampled_ape,
 )
+from cramlite.resources import shipped_data_path
 from cramlite.strategies import Candidate, make_strategy
 from tests.conftest import run_cli
 
-DATA = Path(__file__).resolve().parents[1] / "data" / "human_sequences" / \
-    "table_setting_sequences.csv"
+DATA = shipped_data_path("table-setting")
 
 
 def episode(sequence: str, positions: dict[str, tuple], starts: list[tuple], **cats) -> Episode:

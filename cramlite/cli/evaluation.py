@@ -20,7 +20,9 @@ from cramlite.strategies.cost import DIMS
 
 def _load_episodes(args: argparse.Namespace):
     from cramlite.evaluation.data import load_episodes
+    from cramlite.resources import resolve_data_path
 
+    args.data = str(resolve_data_path(args.data))
     episodes, bad = load_episodes(args.data, on_bad_row=args.on_bad_row)
     for row in bad:
         print(f"cramlite {args.command}: skipped {args.data}: {row}", file=sys.stderr)
@@ -124,7 +126,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
 def _add_data_arguments(p: argparse.ArgumentParser, metrics: tuple[str, ...]) -> None:
     from cramlite.strategies import FORMS
 
-    p.add_argument("data", help="CSV of recorded sequences (the published OPM format)")
+    p.add_argument("data", help="CSV of recorded sequences (the published OPM format), or "
+                                "`table-setting` for the shipped 186 episodes")
     p.add_argument("--strategy", default="opm", help="strategy name (see `cramlite strategies`)")
     p.add_argument("--metric", default="ape", choices=metrics,
                    help="ape: sampled APE (median over repeats); expected-ape: its exact "

@@ -16,6 +16,7 @@ from typing import Any
 import yaml
 
 from cramlite.errors import SetupError
+from cramlite.resources import worlds_dir
 
 #: Relational-dependency categories of the OPM (SPEC section 1); "none" means k = 1.
 CATEGORIES = ("strong", "mid", "food", "none")
@@ -23,11 +24,6 @@ SETUP_FORMAT = 1
 
 ITEM_KEYS = {"name", "type", "pose", "surface", "contained", "category", "target"}
 TOP_KEYS = {"format", "name", "description", "world", "robot", "items", "baseline_order"}
-
-
-def worlds_dir() -> Path:
-    """The folder holding kitchen URDFs, item URDFs and the shipped setups."""
-    return Path(__file__).resolve().parents[2] / "worlds"
 
 
 def builtin_setup_names() -> list[str]:
