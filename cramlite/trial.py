@@ -10,15 +10,17 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from cramlite.designators import ExecutionOptions, RobotContext, SimulatedProcessModules
+from cramlite.errors import SetupError
 from cramlite.plan_names import PLAN_NAMES  # noqa: F401  (re-exported)
 from cramlite.strategies import make_strategy
 from cramlite.world.bodies import yaw_quat
-from cramlite.world.setup import Setup, load_setup
+from cramlite.world.setup import Setup, load_setup, resolve_setup_path
 from cramlite.world.world import World
 
 RESTING_TOLERANCE_M = 0.01
@@ -36,8 +38,15 @@ class TrialResult:
     base_path_m: float  #: length of the base paths actually driven
     straight_line_m: float  #: sum of straight xy legs robot -> item -> goal
     wall_s: float  #: planning + execution wall time (world loading excluded)
-    robot_time_s: float  #: wall_s + driving time at the robot's speed
+    drive_s: float  #: robot time of the executed base trajectories
+    arm_s: float  #: robot time of the executed arm, torso and gripper trajectories
+    robot_time_s: float  #: wall_s + drive_s + arm_s
     items: dict[str, dict[str, Any]] = field(default_factory=dict)
+    #: The task tree: every action and motion with its robot-time span and status.
+    actions: list[dict[str, Any]] = field(default_factory=list)
+    #: Arm motions executed, and how many of them OMPL planned (straight path blocked).
+    arm_motions: int = 0
+    planned_arm_motions: int = 0
     log: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
@@ -66,8 +75,9 @@ class TrialRunner:
 
     def run(self, strategy: str = "baseline", plan: str = "set-table", seed: int = 0,
             params: dict[str, float] | None = None, dims: str = "xy",
-            order: list[str] | None = None) -> TrialResult:
-        """One trial; `order` replaces the setup's baseline order (for `baseline`)."""
+            order: list[str] | None = None, trace: str | Path | None = None) -> TrialResult:
+        """One trial; `order` replaces the setup's baseline order (for `baseline`);
+        `trace`: write every executed state to this file (format cramlite-trace/1)."""
         from cramlite.plans import PLANS
 
         if plan not in PLANS:
@@ -80,17 +90,34 @@ class TrialRunner:
                                 order=list(order or self.setup.baseline_order))
         ctx = RobotContext(world=self.world, modules=self.modules,
                            rng=np.random.default_rng([seed, 0]), options=self.options)
-        start = time.perf_counter()
-        report = PLANS[plan](ctx, self.setup, chooser)
-        wall_s = time.perf_counter() - start
+        if trace is not None:
+            ctx.open_trace(trace, self.setup_reference(), plan, strategy, seed)
+        try:
+            start = time.perf_counter()
+            report = PLANS[plan](ctx, self.setup, chooser)
+            wall_s = time.perf_counter() - start
+        finally:
+            if ctx.trace is not None:
+                ctx.trace.close()
         items, success = self._check(plan)
         success = success and not report.failures
         return TrialResult(
             setup=self.setup.name, plan=plan, strategy=strategy, seed=seed, success=success,
             order=report.order, failures=[f.as_dict() for f in report.failures],
             base_path_m=round(ctx.base_path_m, 6), straight_line_m=round(report.straight_line_m, 6),
-            wall_s=wall_s, robot_time_s=wall_s + ctx.base_path_m / self.options.drive_speed_m_s,
-            items=items, log=ctx.log)
+            wall_s=wall_s, drive_s=round(ctx.drive_s, 6), arm_s=round(ctx.arm_s, 6),
+            robot_time_s=wall_s + ctx.drive_s + ctx.arm_s, items=items,
+            actions=ctx.tasks.as_list(), arm_motions=ctx.arm_motions,
+            planned_arm_motions=ctx.planned_motions, log=ctx.log)
+
+    def setup_reference(self) -> str:
+        """How a trace names this setup: its shipped name, or its file's absolute path."""
+        try:
+            if resolve_setup_path(self.setup.name).resolve() == self.setup.source.resolve():
+                return self.setup.name
+        except SetupError:
+            pass
+        return str(self.setup.source.resolve())
 
     def _items_at_targets(self) -> None:
         for spec in self.setup.items:
@@ -102,7 +129,7 @@ class TrialRunner:
         counter = self.world.surface("counter")
         for spec in self.setup.items:
             (x, y, z), _ = self.world.objects[spec.name].pose()
-            if plan == "set-table":
+            if plan != "clear-table":  # setting the table (or a user's plan): at the targets
                 off = math.dist((x, y), (spec.target.x, spec.target.y))
                 ok = off <= self.options.place_tolerance_m and \
                     abs(z - spec.target.z) <= RESTING_TOLERANCE_M

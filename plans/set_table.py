@@ -68,7 +68,11 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
             report.failures.append(failure)
         (x, y, _), _ = ctx.modules.object_pose(chosen.name)
         report.add_leg(here[:2], chosen.position[:2], (x, y))
-    ParkArmsAction().perform(ctx)
+    try:
+        ParkArmsAction().perform(ctx)
+    except PlanFailure as failure:
+        ctx.note(f"failed: {failure}")
+        report.failures.append(failure)
     return report
 
 

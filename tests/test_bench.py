@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from cramlite.bench.store import TIMING_COLUMNS
+from cramlite.trace import read_trace
 from tests.conftest import ROOT, run_cli
 
 SMALL = ["--setups", "v1", "--strategies", "opm,random", "--trials", "2", "--no-plots"]
@@ -52,7 +53,7 @@ def bench(out: Path, *args: str, env: dict | None = None) -> subprocess.Complete
 
 def test_same_seed_same_rows_and_a_trial_reruns_alone(tmp_path: Path) -> None:
     a, b = tmp_path / "a", tmp_path / "b"
-    first = bench(a, *SMALL, "--workers", "2")
+    first = bench(a, *SMALL, "--workers", "2", "--traces")
     assert first.returncode == 0, first.stderr
     second = bench(b, *SMALL, "--workers", "1")
     assert second.returncode == 0, second.stderr
@@ -68,6 +69,15 @@ def test_same_seed_same_rows_and_a_trial_reruns_alone(tmp_path: Path) -> None:
     assert f"{data['base_path_m']}" == row["base_path_m"]
     summary = (a / "summary.md").read_text()
     assert "| v1 | opm | 2 | 100% |" in summary
+    # --traces: one trace per trial, named by setup, strategy and trial, timed like the row
+    traces = sorted(p.name for p in (a / "traces").iterdir())
+    assert traces == ["v1-opm-0.jsonl", "v1-opm-1.jsonl", "v1-random-0.jsonl",
+                      "v1-random-1.jsonl"]
+    recorded = read_trace(a / "traces" / f"v1-random-{row['trial']}.jsonl")
+    assert recorded.header["seed"] == int(row["seed"])
+    assert recorded.duration_s == pytest.approx(float(row["drive_s"]) + float(row["arm_s"]),
+                                                rel=0.01)
+    assert not (b / "traces").exists()
 
 
 def test_interrupted_run_resumes_with_the_remaining_trials(tmp_path: Path) -> None:

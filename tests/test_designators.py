@@ -30,6 +30,7 @@ from cramlite.designators.grasps import grasp_height_m
 from cramlite.designators.motions import AttachMotion, MoveArmJointsMotion
 from cramlite.motion.ik import arm_ik, tool_frame
 from cramlite.world import World, load_setup
+from cramlite.world.bullet import p
 
 
 @pytest.fixture
@@ -51,9 +52,11 @@ def test_object_designators(world) -> None:
 
 def test_costmap_location_offers_checked_reachable_poses(world) -> None:
     with simulated_robot(world) as ctx:
-        position = world.objects["milk"].position()
-        location = CostmapLocation(position, {"front": grasp_height_m("front", 0.2)},
-                                   ignore=["milk"])
+        ParkArmsAction().perform(ctx)
+        MoveTorsoAction(0.25).perform(ctx)
+        position, orientation = world.objects["milk"].pose()
+        location = CostmapLocation(position, {"front": grasp_height_m("front", 0.2)}, "milk",
+                                   orientation=orientation)
         poses = []
         for pose in location.ground(ctx):
             poses.append(pose)
@@ -66,13 +69,39 @@ def test_costmap_location_offers_checked_reachable_poses(world) -> None:
             world.robot.set_joint_positions(pose.joints)
             tool, _ = world.robot.link_pose(tool_frame(pose.arm))
             assert math.dist(tool, (position[0], position[1], position[2] + 0.1)) < 0.005
-            print(pose.describe())
+            # pre-grasp and grasp touch nothing but the milk; at the lift, the milk in hand
+            # touches nothing either
+            for joints, holding in ((pose.pre_joints, False), (pose.joints, False),
+                                    (pose.post_joints, True)):
+                world.robot.set_joint_positions(joints)
+                if holding:
+                    tool = world.robot.link_pose(tool_frame(pose.arm))
+                    world.objects["milk"].set_pose(*p.multiplyTransforms(*tool, *pose.relative))
+                found = deepest_contacts(world, {"milk"})
+                if holding:
+                    found |= deepest_contacts(world, set(), body=world.objects["milk"].body)
+                print(pose.describe(), found)
+                assert all(depth <= 0.01 for depth in found.values()), found
+            world.objects["milk"].set_pose(position, orientation)
+
+
+def deepest_contacts(world, allowed: set[str], body: int | None = None) -> dict[str, float]:
+    """Penetration depth of the robot (or another body) into the kitchen and the items but
+    `allowed` (an independent, whole-body check with PyBullet)."""
+    body = world.robot.body if body is None else body
+    out = {}
+    others = {"kitchen": world.environment} | {n: o.body for n, o in world.objects.items()
+                                               if n not in allowed and o.body != body}
+    for name, other in others.items():
+        points = p.getClosestPoints(body, other, 0.0, physicsClientId=world.client)
+        out[name] = max((-pt[8] for pt in points), default=0.0)
+    return out
 
 
 def test_costmap_location_is_empty_for_an_unreachable_point(world) -> None:
     with simulated_robot(world) as ctx:
         behind_counter = (1.8, 0.0, 0.85)  # back of the counter: no base pose reaches it
-        location = CostmapLocation(behind_counter, {"front": 0.1})
+        location = CostmapLocation(behind_counter, {"front": 0.1}, "milk")
         assert list(location.ground(ctx)) == []
         assert "base inside fixed geometry" in location.describe_rejections()
 
@@ -96,15 +125,19 @@ def test_placing_location_avoids_occupied_spots_and_respects_yaw(world) -> None:
 
 def test_motions_move_attached_objects_with_the_gripper(world) -> None:
     with simulated_robot(world) as ctx:
-        world.robot.set_base_pose(0.85, 0.85 + 0.188, 0.0)
+        ParkArmsAction().perform(ctx)
+        world.robot.set_base_pose(0.5, 0.85 + 0.188, 0.0)
         AttachMotion("right", "cup").perform(ctx)
         before = np.array(world.objects["cup"].position())
         tool_before = np.array(world.robot.link_pose(tool_frame("right"))[0])
+        arm_before = ctx.arm_s
         MoveArmJointsMotion({"torso_lift_joint": 0.2}).perform(ctx)
         moved = np.array(world.objects["cup"].position()) - before
         tool_moved = np.array(world.robot.link_pose(tool_frame("right"))[0]) - tool_before
         assert moved == pytest.approx(tool_moved, abs=1e-6)
         assert moved[2] == pytest.approx(0.2, abs=1e-3)
+        # the PR2's torso: 1.3 cm/s, and a quarter second to reach that speed
+        assert ctx.arm_s - arm_before == pytest.approx(0.2 / 0.013 + 0.25, rel=0.01)
 
 
 def test_move_tcp_motion_reaches_a_pose_or_fails_typed(world) -> None:
@@ -114,6 +147,7 @@ def test_move_tcp_motion_reaches_a_pose_or_fails_typed(world) -> None:
 
     with simulated_robot(world) as ctx:
         world.robot.set_base_pose(0.0, 0.0, 0.0)
+        ParkArmsAction().perform(ctx)
         target = pin.SE3(np.eye(3), np.array([0.6, -0.2, 1.0]))
         MoveTCPMotion("right", target).perform(ctx)
         tool, _ = world.robot.link_pose(tool_frame("right"))
@@ -157,11 +191,11 @@ class NavigationFailsOnce(SimulatedProcessModules):
         super().__init__(world)
         self.refused = 0
 
-    def move_base(self, waypoints):
+    def execute_base_trajectory(self, trajectory, on_state=None):
         if self.refused == 0:
             self.refused += 1
             raise NavigationFailed("path blocked by a person (injected)")
-        super().move_base(waypoints)
+        super().execute_base_trajectory(trajectory, on_state)
 
 
 def test_transport_falls_through_to_the_next_candidate(world) -> None:

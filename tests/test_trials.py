@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
+from cramlite.trace import read_trace
+from cramlite.trace.replay import penetrations
 from cramlite.trial import TrialRunner, run_trial
 from tests.conftest import run_cli
 
@@ -22,17 +25,30 @@ TABLE_4_3 = {"v1": "bowl breakfast-cereal cup spoon milk",
 
 
 @pytest.mark.parametrize("setup", sorted(TABLE_4_2))
-def test_baseline_and_opm_set_the_table_in_the_source_orders(setup: str) -> None:
+def test_baseline_and_opm_set_the_table_in_the_source_orders_and_nothing_goes_through_anything(
+        setup: str, tmp_path) -> None:
     with TrialRunner(setup) as runner:
         for strategy, table in (("baseline", TABLE_4_2), ("opm", TABLE_4_3)):
-            result = runner.run(strategy, seed=0)
+            trace = tmp_path / f"{setup}-{strategy}.jsonl"
+            result = runner.run(strategy, seed=0, trace=trace)
             print(setup, strategy, result.order, result.failures)
             assert result.success, result.failures
             assert " ".join(result.order) == table[setup]
             assert all(item["ok"] and item["off_target_m"] <= 0.05
                        for item in result.items.values())
             assert 5 < result.base_path_m < 30 and result.straight_line_m > 5
-            assert result.robot_time_s == pytest.approx(result.wall_s + result.base_path_m)
+            assert result.robot_time_s == pytest.approx(
+                result.wall_s + result.drive_s + result.arm_s)
+            # the trace holds what was executed: its path is the driven path, its clock
+            # the robot time, and nothing is inside anything anywhere along it
+            recorded = read_trace(trace)
+            base = np.array([s["base"] for s in recorded.states])
+            driven = float(np.hypot(*np.diff(base[:, :2], axis=0).T).sum())
+            assert driven == pytest.approx(result.base_path_m, rel=1e-3)
+            assert recorded.duration_s == pytest.approx(result.drive_s + result.arm_s, rel=0.01)
+            found = penetrations(recorded, substeps=2, world=runner.world)
+            runner.world.restore(runner._initial)
+            assert found == [], [f.describe() for f in found]
 
 
 def test_same_seed_same_trial_in_a_reused_world() -> None:

@@ -12,7 +12,7 @@ import numpy as np
 
 from cramlite.bench.specs import FIXED_ORDER
 
-LABELS = {"robot_time_s": "robot time (s): wall + driving at 1 m/s",
+LABELS = {"robot_time_s": "robot time (s): wall + driving + arm motion",
           "base_path_m": "driven base path (m)", "straight_line_m": "straight-line legs (m)"}
 
 

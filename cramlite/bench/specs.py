@@ -33,6 +33,8 @@ class TrialSpec:
     batch_seed: int
     plan: str = "set-table"
     given_order: tuple[str, ...] = ()
+    #: Write the trial's trace (cramlite-trace/1) to this file ("" = no trace).
+    trace: str = ""
 
     @property
     def key(self) -> tuple[str, ...]:

@@ -19,7 +19,7 @@ from typing import Any
 
 COLUMNS = ["setup", "plan", "strategy", "given_order", "trial", "seed", "batch_seed", "success",
            "order", "failures", "failure_types", "base_path_m", "straight_line_m", "wall_s",
-           "robot_time_s", "items", "error_type", "error", "worker"]
+           "drive_s", "arm_s", "robot_time_s", "items", "error_type", "error", "worker"]
 #: Columns that measure time or place, and so differ between identical runs.
 TIMING_COLUMNS = ("wall_s", "robot_time_s", "worker")
 KEY_COLUMNS = ("setup", "plan", "strategy", "given_order", "trial", "batch_seed")

@@ -1,7 +1,8 @@
 """Batch summary: per setup and strategy, and paired tests OPM vs baseline (scipy).
 
-Columns: trials, success rate, mean/median wall time, robot time (wall + driving at the
-robot's speed), driven base path, straight-line legs, the most frequent fetch order and
+Columns: trials, success rate, mean/median wall time, robot time (wall + driving + arm
+motion, from the executed trajectories), driven base path, straight-line legs, driving and
+arm time, the most frequent fetch order and
 its normalised edit distance to the setup's baseline order.
 """
 
@@ -20,7 +21,7 @@ import numpy as np
 from cramlite.bench.specs import FIXED_ORDER
 from cramlite.evaluation.metrics import edit_distance
 
-MEASURES = ("wall_s", "robot_time_s", "base_path_m", "straight_line_m")
+MEASURES = ("wall_s", "robot_time_s", "base_path_m", "straight_line_m", "drive_s", "arm_s")
 
 
 def _float(value: Any) -> float:
@@ -124,20 +125,22 @@ def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[
             writer.writeheader()
             writer.writerows(summary)
     lines = ["| setup | strategy | trials | success | wall s (mean/median) | robot time s | "
-             "driven path m | straight-line m | edit vs baseline | order |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "driving s | arm s | driven path m | straight-line m | edit vs baseline | order |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for e in summary:
         lines.append(
             f"| {e['setup']} | {e['strategy']} | {e['trials']} | {e['success_rate']:.0%} | "
             f"{e['wall_s_mean']:.2f} / {e['wall_s_median']:.2f} | "
             f"{e['robot_time_s_mean']:.2f} / {e['robot_time_s_median']:.2f} | "
+            f"{e['drive_s_mean']:.2f} | {e['arm_s_mean']:.2f} | "
             f"{e['base_path_m_mean']:.2f} / {e['base_path_m_median']:.2f} | "
             f"{e['straight_line_m_mean']:.2f} / {e['straight_line_m_median']:.2f} | "
             f"{e['edit_vs_baseline']:.2f} | {e['order']} |")
     lines.append("")
     lines.append("Driven path: length of the base paths actually executed. Straight-line: sum "
                  "over steps of the xy distances robot -> item -> where it was put. Robot time: "
-                 "wall time + driving time at 1.0 m/s.")
+                 "wall time + driving time (base trajectories at 1.0 m/s, 1 rad/s) + arm time "
+                 "(arm, torso and gripper trajectories timed from the URDF's limits).")
     for test in tests:
         lines += ["", f"Wilcoxon signed-rank, {test['strategy']} vs {test['reference']} "
                       f"({test['pairs']} pairs by setup and trial):"]

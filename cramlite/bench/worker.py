@@ -35,7 +35,7 @@ def run_spec(spec: TrialSpec) -> dict[str, Any]:
             runner = _RUNNERS[spec.setup_path] = TrialRunner(spec.setup_path)
         strategy = "baseline" if spec.strategy == FIXED_ORDER else spec.strategy
         result = runner.run(strategy, spec.plan, spec.seed,
-                            order=list(spec.given_order) or None)
+                            order=list(spec.given_order) or None, trace=spec.trace or None)
     except Exception as exc:  # recorded, the batch goes on
         row.update(success=False, error_type=type(exc).__name__,
                    error=f"{exc}".strip() or traceback.format_exc(limit=1).strip(),
@@ -45,7 +45,8 @@ def run_spec(spec: TrialSpec) -> dict[str, Any]:
                failures=json.dumps(result.failures),
                failure_types=" ".join(f["type"] for f in result.failures),
                base_path_m=result.base_path_m, straight_line_m=result.straight_line_m,
-               wall_s=result.wall_s, robot_time_s=result.robot_time_s,
+               wall_s=result.wall_s, drive_s=result.drive_s, arm_s=result.arm_s,
+               robot_time_s=result.robot_time_s,
                items=json.dumps(result.items))
     return row
 
@@ -55,5 +56,6 @@ def base_row(spec: TrialSpec) -> dict[str, Any]:
             "given_order": " ".join(spec.given_order), "trial": spec.trial, "seed": spec.seed,
             "batch_seed": spec.batch_seed, "success": False, "order": "", "failures": "[]",
             "failure_types": "", "base_path_m": "", "straight_line_m": "", "wall_s": "",
+            "drive_s": "", "arm_s": "",
             "robot_time_s": "", "items": "{}", "error_type": "", "error": "",
             "worker": worker_name()}

@@ -19,6 +19,7 @@ from cramlite.plan_names import PLAN_NAMES
 
 def cmd_bench(args: argparse.Namespace) -> int:
     import os
+    from dataclasses import replace
     from pathlib import Path
 
     from cramlite.bench.execute import run_batch
@@ -69,6 +70,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
                   if args.all_orders else None)
     specs = make_specs({n: s.source for n, s in setups.items()}, strategies, args.trials,
                        args.seed, args.plan, all_orders)
+    if args.traces:
+        traces = out / "traces"
+        specs = [replace(s, trace=str(traces / f"{s.setup}-{s.strategy}-{s.trial}.jsonl"))
+                 for s in specs]
     done = store.done_keys()
     todo = [spec for spec in specs if spec.key not in done]
     workers = args.workers or os.cpu_count() or 1
@@ -140,4 +145,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     bench.add_argument("--plan", default="set-table", choices=PLAN_NAMES, help="which plan")
     bench.add_argument("--out", default="results", help="results folder (default results)")
     bench.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    bench.add_argument("--traces", action="store_true",
+                       help="write each trial's trace to OUT/traces/SETUP-STRATEGY-TRIAL.jsonl "
+                            "(replay them with `cramlite replay`)")
     bench.set_defaults(func=cmd_bench)

@@ -44,7 +44,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     except RuntimeError as exc:  # no display for --gui
         raise UserInputError(str(exc), field="--gui") from None
     with runner:
-        result = runner.run(args.strategy, args.plan, args.seed, params=params, dims=args.dims)
+        result = runner.run(args.strategy, args.plan, args.seed, params=params, dims=args.dims,
+                            trace=args.trace)
         if args.image:
             from cramlite.world.render import render, save_png
 
@@ -60,7 +61,12 @@ def cmd_run(args: argparse.Namespace) -> int:
         print(f"  order: {', '.join(result.order)}")
         print(f"  driven base path {result.base_path_m:.2f} m, straight-line legs "
               f"{result.straight_line_m:.2f} m")
-        print(f"  wall {result.wall_s:.2f} s, robot time {result.robot_time_s:.2f} s")
+        print(f"  robot time {result.robot_time_s:.2f} s = wall {result.wall_s:.2f} s + driving "
+              f"{result.drive_s:.2f} s + arm {result.arm_s:.2f} s "
+              f"({result.planned_arm_motions} of {result.arm_motions} arm motions planned "
+              "around obstacles)")
+        if args.trace:
+            print(f"  trace: {args.trace}")
         for failure in result.failures:
             print(f"  failure: {failure['type']}: {failure['message']}")
         if args.log:
@@ -92,4 +98,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--json", action="store_true", help="print one JSON object")
     run.add_argument("--log", action="store_true", help="also print what the plan did")
     run.add_argument("--image", help="write a PNG of the scene after the trial")
+    run.add_argument("--trace", help="write every executed state to this JSON Lines file "
+                                     "(cramlite-trace/1; `cramlite replay` shows it)")
     run.set_defaults(func=cmd_run)

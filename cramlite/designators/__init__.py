@@ -12,6 +12,7 @@ from cramlite.designators.context import ExecutionOptions, RobotContext, simulat
 from cramlite.designators.failures import (
     GraspFailed,
     IKFailed,
+    MotionPlanningFailed,
     NavigationFailed,
     NoPathFound,
     ObjectNotFound,
@@ -35,7 +36,8 @@ from cramlite.designators.process_modules import ProcessModules, SimulatedProces
 
 __all__ = [
     "AttachMotion", "CostmapLocation", "DetachMotion", "ExecutionOptions", "GraspFailed",
-    "IKFailed", "MoveArmJointsMotion", "MoveGripperMotion", "MoveMotion", "MoveTCPMotion",
+    "IKFailed", "MotionPlanningFailed", "MoveArmJointsMotion", "MoveGripperMotion", "MoveMotion",
+    "MoveTCPMotion",
     "MoveTorsoAction",
     "MoveTorsoMotion", "NavigateAction", "NavigationFailed", "NoPathFound", "ObjectDesignator",
     "ObjectDesignatorDescription", "ObjectNotFound", "ObjectUnreachable", "ParkArmsAction",

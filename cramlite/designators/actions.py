@@ -1,10 +1,12 @@
 """Action designators: what to do, resolved into motions at run time.
 
 Missing parameters (arm, grasp, base pose, place pose) are resolved from location
-designators. Unlike PyCRAM, a failing candidate is not the end: `TransportAction` goes
-on to the designator's next candidate (next base pose, other arm, other grasp, next
-placement) up to `ExecutionOptions.max_candidates`, and the failure that finally escapes
-lists what was tried.
+designators, whose candidates are checked configuration by configuration before they are
+offered; the motions between configurations are planned and checked too. Unlike PyCRAM,
+a failing candidate is not the end: `TransportAction` goes on to the designator's next
+candidate (next base pose, other arm, other grasp, next placement) up to
+`ExecutionOptions.max_candidates`, and the failure that finally escapes lists what was
+tried.
 """
 
 from __future__ import annotations
@@ -13,7 +15,10 @@ import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
-from cramlite.designators.context import Holding, RobotContext
+import numpy as np
+import pinocchio as pin
+
+from cramlite.designators.context import Holding, RobotContext, carried_map
 from cramlite.designators.failures import (
     GraspFailed,
     NavigationFailed,
@@ -21,14 +26,16 @@ from cramlite.designators.failures import (
     PlacementFailed,
     PlanFailure,
 )
-from cramlite.designators.grasps import (
-    LIFT_M,
-    grasp_height_m,
-    grasps_for,
-    in_base_frame,
-    tool_pose,
+from cramlite.designators.grasps import grasp_height_m, grasps_for, relative_pose
+from cramlite.designators.locations import (
+    PICK,
+    PLACE,
+    CostmapLocation,
+    PlacingLocation,
+    ReachablePose,
+    carry_joints,
+    held,
 )
-from cramlite.designators.locations import CostmapLocation, PlacingLocation, ReachablePose
 from cramlite.designators.motions import (
     AttachMotion,
     DetachMotion,
@@ -38,26 +45,41 @@ from cramlite.designators.motions import (
     MoveTorsoMotion,
 )
 from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription, as_object
-from cramlite.motion.ik import ARMS, arm_ik
+from cramlite.designators.tasks import recorded
+from cramlite.motion.ik import ARMS
+from cramlite.motion.trajectory import wrap_angle
 from cramlite.world.bodies import quat_yaw
-from cramlite.world.pr2 import PARK_JOINTS
+from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT
 
 BasePose = tuple[float, float, float]
 Vec3 = tuple[float, float, float]
 GRASP_CHECK_M = 0.03
 RESTING_HEIGHT_TOLERANCE_M = 0.01
+PARKED_TOLERANCE_RAD = 1e-3
+#: Spacing of the points that outline a carried object's footprint (the map has 1 cm cells).
+FOOTPRINT_SPACING_M = 0.01
 
 
 @dataclass
 class ParkArmsAction:
-    """Tuck the arms for driving (carried objects stay in hand)."""
+    """Get the arms ready for driving, one after the other: an empty arm tucked (PyCRAM's
+    park pose), an arm holding something in the carry pose (the object upright in front
+    of the robot, above the counters)."""
 
     arm: str = "both"  #: "left", "right" or "both"
 
+    @recorded
     def perform(self, ctx: RobotContext) -> None:
-        arms = ARMS if self.arm == "both" else (self.arm,)
-        joints = {k: v for a in arms for k, v in PARK_JOINTS[a].items()}
-        MoveArmJointsMotion(joints).perform(ctx)
+        for arm in ARMS if self.arm == "both" else (self.arm,):
+            target = dict(PARK_JOINTS[arm])
+            holding = ctx.holding.get(arm)
+            if holding is not None:
+                torso = ctx.modules.joint_positions([TORSO_JOINT])[TORSO_JOINT]
+                carry = carry_joints(ctx, arm, holding.grasp, holding.grasp_height_m, torso)
+                target = carry or target
+            now = ctx.modules.joint_positions(list(target))
+            if any(abs(wrap_angle(now[n] - v)) > PARKED_TOLERANCE_RAD for n, v in target.items()):
+                MoveArmJointsMotion(dict(target)).perform(ctx)
         update_carried(ctx)
 
 
@@ -65,6 +87,7 @@ class ParkArmsAction:
 class MoveTorsoAction:
     height_m: float  #: torso lift in metres (0 to 0.31 on the PR2)
 
+    @recorded
     def perform(self, ctx: RobotContext) -> None:
         MoveTorsoMotion(self.height_m).perform(ctx)
 
@@ -75,7 +98,9 @@ class NavigateAction:
 
     target: BasePose  #: x, y, yaw in the world
 
+    @recorded
     def perform(self, ctx: RobotContext) -> None:
+        update_carried(ctx)
         start = ctx.modules.base_pose()
         path = ctx.base_planner.plan(start, self.target, ctx.rng)
         if path is None:
@@ -85,57 +110,74 @@ class NavigateAction:
         MoveMotion(path.waypoints).perform(ctx)
 
 
+def _se3(pose: tuple[Vec3, tuple[float, float, float, float]]) -> pin.SE3:
+    (x, y, z), (qx, qy, qz, qw) = pose
+    return pin.SE3(pin.Quaternion(qw, qx, qy, qz).toRotationMatrix(), np.array([x, y, z]))
+
+
 @dataclass
 class PickUpAction:
-    """Grasp an object from where the robot stands and lift it into the park pose."""
+    """Grasp an object from where the robot stands, lift it and park the arm."""
 
     object: ObjectDesignator | ObjectDesignatorDescription | str  #: what to pick up
     arms: Sequence[str] | None = None  #: arms to try (default both)
     grasps: Sequence[str] | None = None  #: grasps to try (default by object shape)
-    reach: ReachablePose | None = None  #: precomputed joints from a location designator
+    reach: ReachablePose | None = None  #: checked joints from a location designator
 
+    @recorded
     def perform(self, ctx: RobotContext) -> str:
         obj = as_object(self.object, ctx)
-        if any(h.obj == obj.name for h in ctx.holding.values()):
+        if obj.name in held(ctx):
             raise GraspFailed("already held", obj=obj.name)
         reach = self.reach or self._resolve(ctx, obj)
         if reach.arm in ctx.holding:
             raise GraspFailed(f"the {reach.arm} hand is not free", obj=obj.name)
-        MoveGripperMotion(reach.arm, "open").perform(ctx)
-        MoveArmJointsMotion(reach.pre_joints).perform(ctx)
-        MoveArmJointsMotion(reach.joints).perform(ctx)
-        (bx, by, bz), _ = obj.pose(ctx)
+        touch = (obj.name,)
+        MoveGripperMotion(reach.arm, "open", touch).perform(ctx)
+        MoveArmJointsMotion(reach.pre_joints, touch).perform(ctx)
+        MoveArmJointsMotion(reach.joints, touch).perform(ctx)
+        (bx, by, bz), orientation = obj.pose(ctx)
         height = obj.height_m(ctx)
-        tool, _ = ctx.modules.tool_pose(reach.arm)
+        tool = ctx.modules.tool_pose(reach.arm)
         expected = (bx, by, bz + grasp_height_m(reach.grasp, height))
-        if math.dist(tool, expected) > GRASP_CHECK_M:
-            MoveArmJointsMotion(reach.pre_joints).perform(ctx)
-            raise GraspFailed(f"gripper ended {math.dist(tool, expected) * 100:.1f} cm from the "
-                              "grasp point", obj=obj.name)
-        MoveGripperMotion(reach.arm, "close").perform(ctx)
+        if math.dist(tool[0], expected) > GRASP_CHECK_M:
+            MoveArmJointsMotion(reach.pre_joints, touch).perform(ctx)
+            raise GraspFailed(f"gripper ended {math.dist(tool[0], expected) * 100:.1f} cm from "
+                              "the grasp point", obj=obj.name)
+        MoveGripperMotion(reach.arm, "close", touch).perform(ctx)
         AttachMotion(reach.arm, obj.name).perform(ctx)
-        _, orientation = obj.pose(ctx)
         ctx.holding[reach.arm] = Holding(
             obj.name, reach.grasp, grasp_height_m(reach.grasp, height),
-            yaw_offset=quat_yaw(orientation) - ctx.modules.base_pose()[2])
-        lift = tool_pose(reach.grasp, (bx, by, bz + LIFT_M), ctx.holding[reach.arm].grasp_height_m,
-                         ctx.modules.base_pose()[2])
-        solution = arm_ik(reach.arm).solve(in_base_frame(lift, ctx.modules.base_pose()), ctx.rng,
-                                           reach.joints)
-        if solution is not None:
-            MoveArmJointsMotion(solution.joints).perform(ctx)
-        ParkArmsAction(reach.arm).perform(ctx)
+            yaw_offset=quat_yaw(orientation) - ctx.modules.base_pose()[2],
+            relative=relative_pose(_se3(tool), (bx, by, bz), orientation))
+        try:
+            MoveArmJointsMotion(reach.post_joints).perform(ctx)  # lift
+            ParkArmsAction(reach.arm).perform(ctx)
+        except PlanFailure:
+            self._put_down_again(ctx, reach, obj.name)
+            raise
         return reach.arm
 
+    def _put_down_again(self, ctx: RobotContext, reach: ReachablePose, name: str) -> None:
+        """After a failed lift: back to the grasp, let go, retreat (all checked paths)."""
+        try:
+            MoveArmJointsMotion(reach.joints).perform(ctx)
+            MoveGripperMotion(reach.arm, "open", (name,)).perform(ctx)
+            DetachMotion(reach.arm, name).perform(ctx)
+            del ctx.holding[reach.arm]
+            MoveArmJointsMotion(reach.pre_joints, (name,)).perform(ctx)
+        except PlanFailure:
+            ctx.note(f"could not put {name} down again after a failed lift")
+
     def _resolve(self, ctx: RobotContext, obj: ObjectDesignator) -> ReachablePose:
-        (x, y, z), _ = obj.pose(ctx)
+        (x, y, z), orientation = obj.pose(ctx)
         height = obj.height_m(ctx)
         base = ctx.modules.base_pose()
         tried = []
         for arm in self.arms or [a for a in ARMS if a not in ctx.holding]:
             for grasp in self.grasps or grasps_for(height):
                 location = CostmapLocation((x, y, z), {grasp: grasp_height_m(grasp, height)},
-                                           [arm], ignore=[obj.name])
+                                           obj.name, [arm], PICK, orientation=orientation)
                 reach = location.reach_from(ctx, base, arm, grasp)
                 if reach is not None:
                     return reach
@@ -146,12 +188,14 @@ class PickUpAction:
 
 @dataclass
 class PlaceAction:
-    """Put a held object down at a position from where the robot stands."""
+    """Put a held object down at a position from where the robot stands: hover above the
+    spot, lower it, let go, retreat, park the arm."""
 
     object: ObjectDesignator | ObjectDesignatorDescription | str  #: the held object
     target: Vec3  #: where the object's bottom centre goes
-    reach: ReachablePose | None = None  #: precomputed joints from a location designator
+    reach: ReachablePose | None = None  #: checked joints from a location designator
 
+    @recorded
     def perform(self, ctx: RobotContext) -> None:
         obj = as_object(self.object, ctx)
         arm = next((a for a, h in ctx.holding.items() if h.obj == obj.name), None)
@@ -161,12 +205,14 @@ class PlaceAction:
         reach = self.reach or self._resolve(ctx, arm, holding)
         MoveArmJointsMotion(reach.pre_joints).perform(ctx)
         MoveArmJointsMotion(reach.joints).perform(ctx)
-        MoveGripperMotion(arm, "open").perform(ctx)
+        touch = (obj.name,)
+        MoveGripperMotion(arm, "open", touch).perform(ctx)
         DetachMotion(arm, obj.name).perform(ctx)
         del ctx.holding[arm]
-        MoveArmJointsMotion(reach.pre_joints).perform(ctx)
+        ctx.modules.settle(ctx.options.settle_s, [obj.name])
+        ctx.record_state()
+        MoveArmJointsMotion(reach.post_joints, touch).perform(ctx)  # retreat
         ParkArmsAction(arm).perform(ctx)
-        ctx.modules.settle(ctx.options.settle_s)
         (x, y, z), _ = obj.pose(ctx)
         off = math.dist((x, y), self.target[:2])
         if off > ctx.options.place_tolerance_m or \
@@ -175,8 +221,8 @@ class PlaceAction:
                                   f"{off * 100:.1f} cm from the place pose", obj=obj.name)
 
     def _resolve(self, ctx: RobotContext, arm: str, holding: Holding) -> ReachablePose:
-        location = CostmapLocation(self.target, {holding.grasp: holding.grasp_height_m}, [arm],
-                                   ignore=[holding.obj])
+        location = CostmapLocation(self.target, {holding.grasp: holding.grasp_height_m},
+                                   holding.obj, [arm], PLACE, relative=holding.relative)
         reach = location.reach_from(ctx, ctx.modules.base_pose(), arm, holding.grasp)
         if reach is None:
             raise ObjectUnreachable("cannot reach the place pose from here", obj=holding.obj)
@@ -195,6 +241,7 @@ class TransportAction:
     arms: Sequence[str] | None = None  #: arms to consider (default both)
     grasps: Sequence[str] | None = None  #: grasps to consider (default by shape)
 
+    @recorded
     def perform(self, ctx: RobotContext) -> None:
         obj = as_object(self.object, ctx)
         ParkArmsAction().perform(ctx)
@@ -210,15 +257,14 @@ class TransportAction:
                ) -> tuple[ReachablePose, tuple[Vec3, ReachablePose]]:
         """Navigate and pick up, trying base poses best first; an arm and grasp that could
         not put the object down at the goal are not used."""
-        (x, y, z), _ = obj.pose(ctx)
+        (x, y, z), orientation = obj.pose(ctx)
         height = obj.height_m(ctx)
         tried: list[str] = []
         last: PlanFailure | None = None
         grasps = list(self.grasps or grasps_for(height))
         arms = [a for a in (self.arms or ARMS) if a not in ctx.holding]
         location = CostmapLocation((x, y, z), {g: grasp_height_m(g, height) for g in grasps},
-                                   arms, ignore=[obj.name])
-        _, orientation = obj.pose(ctx)
+                                   obj.name, arms, PICK, orientation=orientation)
         round_object = obj.is_round(ctx)
         deliverable: dict[tuple[str, str, int], tuple[Vec3, ReachablePose] | None] = {}
         attempts = 0
@@ -227,8 +273,7 @@ class TransportAction:
             yaw_offset = quat_yaw(orientation) - reach.base[2]
             combo = (reach.arm, reach.grasp, 0 if round_object else round(yaw_offset * 18))
             if combo not in deliverable:
-                deliverable[combo] = self._plan_delivery(ctx, obj, reach.arm, reach.grasp,
-                                                         height, yaw_offset)
+                deliverable[combo] = self._plan_delivery(ctx, obj, reach, height, yaw_offset)
                 if deliverable[combo] is None:
                     tried.append(f"{reach.arm} arm {reach.grasp} grasp: could not put it down "
                                  "at the goal")
@@ -257,15 +302,17 @@ class TransportAction:
             else "no base pose from which an arm reaches it")
         raise cls(reason, obj=obj.name, tried=tried)
 
-    def _plan_delivery(self, ctx: RobotContext, obj: ObjectDesignator, arm: str, grasp: str,
+    def _plan_delivery(self, ctx: RobotContext, obj: ObjectDesignator, pick: ReachablePose,
                        height: float, yaw_offset: float) -> tuple[Vec3, ReachablePose] | None:
-        """A spot of the goal (among its first few free ones) and a base pose from which
-        `arm` puts the object down there with `grasp`, clear of its neighbours."""
+        """A spot of the goal (among its first few free ones) and a checked base pose from
+        which the arm of `pick` puts the object down there, held as `pick` would hold it,
+        clear of its neighbours."""
         placing = PlacingLocation(obj, target=self.target, surface=self.surface,
                                   preferred=self.preferred)
         for index, spot in enumerate(placing.ground(ctx)):
-            location = CostmapLocation(spot, {grasp: grasp_height_m(grasp, height)}, [arm],
-                                       ignore=[obj.name], max_ik_checks=12)
+            location = CostmapLocation(spot, {pick.grasp: grasp_height_m(pick.grasp, height)},
+                                       obj.name, [pick.arm], PLACE, relative=pick.relative,
+                                       max_ik_checks=12)
             for reach in location.ground(ctx):
                 if placing.is_free(ctx, spot, reach.base[2] + yaw_offset):
                     return spot, reach
@@ -296,8 +343,9 @@ class TransportAction:
             except PlanFailure as failure:
                 tried.append(f"{where} from {reach.describe()}: {failure.kind}: {failure.reason}")
                 last = failure
-                if isinstance(failure, PlacementFailed):
+                if obj.name not in held(ctx):
                     break  # it is no longer in hand
+                ParkArmsAction(arm).perform(ctx)
         reason = last.reason if last is not None else "no reachable free place"
         raise PlacementFailed(reason, obj=obj.name, tried=tried)
 
@@ -312,8 +360,9 @@ class TransportAction:
         placing = PlacingLocation(obj, target=self.target, surface=self.surface,
                                   preferred=self.preferred)
         for spot in placing.ground(ctx):
-            location = CostmapLocation(spot, {holding.grasp: holding.grasp_height_m}, [arm],
-                                       ignore=[obj.name], max_ik_checks=12)
+            location = CostmapLocation(spot, {holding.grasp: holding.grasp_height_m},
+                                       obj.name, [arm], PLACE, relative=holding.relative,
+                                       max_ik_checks=12)
             found = False
             for reach in location.ground(ctx):
                 if placing.is_free(ctx, spot, reach.base[2] + holding.yaw_offset):
@@ -326,30 +375,66 @@ class TransportAction:
                   picked_from: ReachablePose) -> None:
         """After a failed delivery nothing stays in hand: put the object back where it was
         taken from (from the same base pose), or, if even that fails, let go of it."""
-        if not any(h.obj == obj.name for h in ctx.holding.values()):
+        arm = next((a for a, h in ctx.holding.items() if h.obj == obj.name), None)
+        if arm is None:
             return
         try:
             NavigateAction(picked_from.base).perform(ctx)
-            PlaceAction(obj, origin, reach=picked_from).perform(ctx)
+            PlaceAction(obj, origin).perform(ctx)
             ctx.note(f"put {obj.name} back at ({origin[0]:.2f}, {origin[1]:.2f})")
         except PlanFailure:
-            for arm, holding in list(ctx.holding.items()):
-                if holding.obj == obj.name:
-                    MoveGripperMotion(arm, "open").perform(ctx)
-                    DetachMotion(arm, obj.name).perform(ctx)
-                    del ctx.holding[arm]
-                    ctx.modules.settle(ctx.options.settle_s)
-                    ctx.note(f"let go of {obj.name}")
+            if arm in ctx.holding:
+                DetachMotion(arm, obj.name).perform(ctx)
+                del ctx.holding[arm]
+                ctx.modules.settle(ctx.options.settle_s, [obj.name])
+                ctx.note(f"let go of {obj.name}")
         update_carried(ctx)
 
 
+def footprint_outline(corners_xy: np.ndarray, spacing: float) -> np.ndarray:
+    """Points every `spacing` along the convex hull of 2D points (a carried object's
+    footprint as seen from above)."""
+    pts = sorted(map(tuple, np.round(corners_xy, 6)))
+    if len(pts) < 3:
+        return np.asarray(pts)
+
+    def half(points):
+        out: list[tuple[float, float]] = []
+        for pt in points:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (pt[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (pt[0] - out[-2][0])) <= 0:
+                out.pop()
+            out.append(pt)
+        return out
+
+    hull = half(pts)[:-1] + half(pts[::-1])[:-1]  # Andrew's monotone chain
+    samples = []
+    for a, b in zip(hull, hull[1:] + hull[:1], strict=True):
+        n = max(1, math.ceil(math.dist(a, b) / spacing))
+        t = np.arange(n)[:, None] / n
+        samples.append(np.asarray(a) + t * (np.asarray(b) - np.asarray(a)))
+    return np.vstack(samples)
+
+
 def update_carried(ctx: RobotContext) -> None:
-    """Tell the base planner where carried objects are, in the robot's frame."""
-    points = []
+    """Tell the base planner the real footprint of every carried object (its box seen
+    from above, in the robot's frame) and the furniture it could touch (whatever rises
+    above its lowest point)."""
     x, y, yaw = ctx.modules.base_pose()
     c, s = math.cos(yaw), math.sin(yaw)
+    points, lowest = [], math.inf
     for holding in ctx.holding.values():
-        (ox, oy, _), _ = ctx.modules.object_pose(holding.obj)
-        dx, dy = ox - x, oy - y
-        points.append((c * dx + s * dy, -s * dx + c * dy))
-    ctx.checker.set_carried(points)
+        obj = ctx.world.objects[holding.obj]
+        ex, ey, ez = obj.extents
+        local = np.array([[sx * ex / 2, sy * ey / 2, sz * ez] for sx in (-1, 1)
+                          for sy in (-1, 1) for sz in (0, 1)])
+        rotation = _se3(ctx.modules.object_pose(holding.obj))
+        world = local @ rotation.rotation.T + rotation.translation
+        lowest = min(lowest, float(world[:, 2].min()))
+        dx, dy = world[:, 0] - x, world[:, 1] - y
+        robot_xy = np.column_stack([c * dx + s * dy, -s * dx + c * dy])
+        points.append(footprint_outline(robot_xy, FOOTPRINT_SPACING_M))
+    if not points:
+        ctx.checker.set_carried([])
+        return
+    ctx.checker.set_carried(np.vstack(points), carried_map(ctx.world, lowest))

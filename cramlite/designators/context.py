@@ -1,38 +1,62 @@
-"""The robot a plan acts through: world, process modules, solvers, seeded generator.
+"""The robot a plan acts through: world, process modules, planners, clock, task tree.
 
 There is no global "current robot": a plan receives a `RobotContext`, made explicitly or
 with `simulated_robot(world)`. Which process modules execute its motions is an argument.
+The context keeps the robot's clock (driving and arm time of the executed trajectories),
+the task tree of what was performed, and, if asked, writes a trace of every state.
 """
 
 from __future__ import annotations
 
 import contextlib
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from cramlite.designators.process_modules import ProcessModules, SimulatedProcessModules
+from cramlite.designators.tasks import TaskTree
+from cramlite.motion.arm_planner import ArmMotionPlanner, ArmPlannerOptions
 from cramlite.motion.base_planner import BaseMotionPlanner, BasePlannerOptions
+from cramlite.motion.collision import CollisionChecker, HeldObject
 from cramlite.motion.footprint import FootprintChecker, OccupancyMap
+from cramlite.motion.ik import tool_frame
+from cramlite.motion.trajectory import (
+    ACCELERATION_TIME_S,
+    BaseTrajectory,
+    JointLimits,
+    JointTrajectory,
+)
+from cramlite.trace.format import TraceWriter
+from cramlite.world.bodies import Quat, Vec3
 from cramlite.world.world import World
 
-#: Carried objects hang at about this height; lower fixed geometry cannot touch them.
-CARRY_BOTTOM_M = 0.95
+#: The joints a trace records (what cramlite moves), in this order.
+TRACE_JOINT_PREFIXES = ("torso_lift_joint", "r_shoulder", "r_upper_arm", "r_elbow", "r_forearm",
+                        "r_wrist", "l_shoulder", "l_upper_arm", "l_elbow", "l_forearm",
+                        "l_wrist")
+FINGER_JOINTS = ("gripper_l_finger_joint", "gripper_r_finger_joint",
+                 "gripper_l_finger_tip_joint", "gripper_r_finger_tip_joint")
 
 
 @dataclass(frozen=True)
 class ExecutionOptions:
-    """Bounds and tolerances of plan execution."""
+    """Bounds, tolerances and speeds of plan execution."""
 
     #: How many candidates (base poses, placements) an action tries before it gives up.
     max_candidates: int = 6
     #: An object counts as placed if it rests within this distance of its target.
     place_tolerance_m: float = 0.05
-    #: Physics time to let a placed object settle.
+    #: Longest physics time to let a placed object settle (stops earlier once at rest).
     settle_s: float = 0.3
-    #: Robot driving speed for robot_time_s (the PR2's 3.6 km/h in the source).
+    #: Robot driving speed (the PR2's 3.6 km/h in the source) and base turn rate.
     drive_speed_m_s: float = 1.0
+    turn_speed_rad_s: float = 1.0
+    #: Scale of the URDF's joint velocity limits for arm, torso and gripper motions.
+    joint_speed_scale: float = 1.0
 
 
 @dataclass
@@ -45,6 +69,44 @@ class Holding:
     #: The object's yaw minus the base yaw it was grasped from: put down from base yaw
     #: psi, it will stand at psi + yaw_offset.
     yaw_offset: float = 0.0
+    #: The object's pose in the tool frame (measured when it was grasped).
+    relative: tuple[Vec3, Quat] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+
+
+def robot_limits(world: World, speed_scale: float = 1.0) -> JointLimits:
+    """The robot's joint limits from its URDF (velocity scaled; acceleration assumed)."""
+    robot = world.robot
+    velocity = {n: v * speed_scale for n, v in robot.velocity_limits.items()}
+    return JointLimits(
+        lower={n: lo for n, (lo, _) in robot.joint_limits.items()},
+        upper={n: hi for n, (_, hi) in robot.joint_limits.items()},
+        velocity=velocity,
+        acceleration={n: v / ACCELERATION_TIME_S for n, v in velocity.items()},
+        continuous=frozenset(n for n in robot.joint_index if robot.is_continuous(n)),
+        prismatic=frozenset(robot.prismatic))
+
+
+def _maps(world: World) -> OccupancyMap:
+    key = ("occupancy", 0.0)
+    if key not in world.cache:
+        world.cache[key] = OccupancyMap(world.environment_boxes())
+    return world.cache[key]
+
+
+def carried_map(world: World, lowest_z: float) -> OccupancyMap:
+    """The fixed world that a carried object whose bottom is at `lowest_z` can touch
+    (links whose top is above it), cached per world by the centimetre."""
+    bucket = math.floor(lowest_z * 100) / 100
+    key = ("occupancy", bucket)
+    if key not in world.cache:
+        world.cache[key] = OccupancyMap(world.environment_boxes(), min_top_m=bucket)
+    return world.cache[key]
+
+
+def collision_checker(world: World) -> CollisionChecker:
+    if "collision" not in world.cache:
+        world.cache["collision"] = CollisionChecker(world)
+    return world.cache["collision"]
 
 
 @dataclass
@@ -56,18 +118,83 @@ class RobotContext:
     rng: np.random.Generator
     options: ExecutionOptions = field(default_factory=ExecutionOptions)
     planner_options: BasePlannerOptions = field(default_factory=BasePlannerOptions)
+    arm_planner_options: ArmPlannerOptions = field(default_factory=ArmPlannerOptions)
     holding: dict[str, Holding] = field(default_factory=dict)
     log: list[str] = field(default_factory=list)
+    #: Length of the base paths driven (m), and robot time spent driving / moving joints.
     base_path_m: float = 0.0
+    drive_s: float = 0.0
+    arm_s: float = 0.0
+    trace: TraceWriter | None = None
 
     def __post_init__(self) -> None:
-        boxes = self.world.environment_boxes()
-        self.checker = FootprintChecker(
-            OccupancyMap(boxes), carried_occupancy=OccupancyMap(boxes, min_top_m=CARRY_BOTTOM_M))
+        self.checker = FootprintChecker(_maps(self.world))
         self.base_planner = BaseMotionPlanner(self.checker, self.planner_options)
+        self.collisions = collision_checker(self.world)
+        self.limits = robot_limits(self.world, self.options.joint_speed_scale)
+        self.arm_planner = ArmMotionPlanner(self.limits, self.arm_planner_options)
+        self.tasks = TaskTree(lambda: self.time_s)
+        #: Last IK solution per (arm, grasp): the seed of the next solve.
+        self.ik_seeds: dict[tuple[str, str], dict[str, float]] = {}
+        #: Arm motions that needed OMPL (the straight path collided) and all arm motions.
+        self.planned_motions = 0
+        self.arm_motions = 0
+        robot = self.world.robot
+        self.trace_joints = [n for n in robot.joint_index
+                             if n.startswith(TRACE_JOINT_PREFIXES)
+                             or any(n == f"{a}_{f}" for a in "rl" for f in FINGER_JOINTS)]
+
+    @property
+    def time_s(self) -> float:
+        """Robot time since the plan started: driving plus arm motion."""
+        return self.drive_s + self.arm_s
 
     def note(self, text: str) -> None:
         self.log.append(text)
+
+    def held_objects(self) -> list[HeldObject]:
+        return [HeldObject(h.obj, tool_frame(arm), h.relative) for arm, h in self.holding.items()]
+
+    # -- executing trajectories ---------------------------------------------------------
+    def drive(self, trajectory: BaseTrajectory) -> None:
+        t0 = self.time_s
+        self.modules.execute_base_trajectory(trajectory, self._observer(t0, trajectory.times))
+        self.base_path_m += trajectory.length_m
+        self.drive_s += trajectory.duration_s
+
+    def move_joints(self, trajectory: JointTrajectory) -> None:
+        t0 = self.time_s
+        self.modules.execute_joint_trajectory(trajectory, self._observer(t0, trajectory.times))
+        self.arm_s += trajectory.duration_s
+
+    def _observer(self, t0: float, times: np.ndarray):
+        if self.trace is None:
+            return None
+        return lambda i: self.record_state(t0 + float(times[i]))
+
+    def record_state(self, t: float | None = None) -> None:
+        """Write the robot's and the objects' current state to the trace (if any)."""
+        if self.trace is None:
+            return
+        joints = self.modules.joint_positions(self.trace_joints)
+        objects = {}
+        for name in self.world.objects:
+            pos, orn = self.modules.object_pose(name)
+            objects[name] = [*pos, *orn]
+        self.trace.write_state(self.time_s if t is None else t, self.modules.base_pose(),
+                               [joints[n] for n in self.trace_joints], [],
+                               {h.obj: arm for arm, h in self.holding.items()}, objects,
+                               self.tasks.current_action())
+
+    def trace_header(self, setup: str, plan: str, strategy: str, seed: int) -> dict[str, Any]:
+        return {"setup": setup, "plan": plan, "strategy": strategy, "seed": seed,
+                "joints": self.trace_joints, "world_joints": []}
+
+    def open_trace(self, path: str | Path, setup: str, plan: str, strategy: str,
+                   seed: int) -> TraceWriter:
+        self.trace = TraceWriter(path, self.trace_header(setup, plan, strategy, seed))
+        self.record_state(0.0)
+        return self.trace
 
 
 @contextlib.contextmanager

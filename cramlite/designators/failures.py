@@ -1,4 +1,4 @@
-"""The failure taxonomy of plans: one root, `PlanFailure`, and five kinds.
+"""The failure taxonomy of plans: one root, `PlanFailure`, and six kinds.
 
 Each failure carries the object it concerns, the reason, and what was tried before it
 escaped (base poses, arms, grasps, placements), so a user can see why a plan gave up.
@@ -56,3 +56,9 @@ class GraspFailed(PlanFailure):
 
 class PlacementFailed(PlanFailure):
     kind = "placement failed"
+
+
+class MotionPlanningFailed(PlanFailure):
+    """No collision-free arm (or torso, gripper) path to a configuration."""
+
+    kind = "motion planning failed"

@@ -1,10 +1,13 @@
 """Location designators: many candidates, best first, each checked before it is offered.
 
-`CostmapLocation`: base poses from which an arm reaches a point with a grasp. Candidates
-lie on rings around the point, facing it, with the arm's shoulder in line; they are
-scored by stand-off (close to the arm's sweet spot) and by how far the robot would have
-to drive, then checked in that order: footprint free in the 2D map, IK solutions for
-the grasp and pre-grasp, and no arm link inside fixed geometry or another item.
+`CostmapLocation`: base poses from which an arm reaches a point with a grasp, to pick an
+object up there or to put a held one down. Candidates lie on rings around the point,
+facing it, with the arm's shoulder in line; they are scored by stand-off (close to the
+arm's sweet spot) and by how far the robot would have to drive, then checked in that
+order: footprint free in the 2D map, then for every configuration the actions will use
+(picking: pre-grasp, grasp, lift, park; placing: pre-place above the spot, place,
+retreat, park) an IK solution and no robot link or carried object inside the kitchen or
+another item. Only fully checked candidates are offered.
 
 `PlacingLocation`: where an object may be put: at a target (then small offsets within
 the placing tolerance), or on free spots of a surface, nearest to a preferred point.
@@ -17,55 +20,91 @@ from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
 from cramlite.designators.context import RobotContext
-from cramlite.designators.grasps import PREGRASP_OFFSET_M, in_base_frame, tool_pose
+from cramlite.designators.grasps import (
+    LIFT_M,
+    PREGRASP_OFFSET_M,
+    PREGRASP_RISE_M,
+    RETREAT_RISE_M,
+    carry_pose,
+    in_base_frame,
+    raised,
+    relative_pose,
+    tool_pose,
+)
 from cramlite.designators.objects import ObjectDesignator
-from cramlite.motion.ik import ARMS, arm_ik
-from cramlite.world.bodies import quat_yaw
-from cramlite.world.bullet import p
-from cramlite.world.pr2 import TORSO_UP_M
+from cramlite.motion.collision import HeldObject
+from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names, tool_frame
+from cramlite.motion.trajectory import densify
+from cramlite.world.bodies import Quat, Vec3, quat_yaw
+from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT, TORSO_UP_M
 
 BasePose = tuple[float, float, float]
-Vec3 = tuple[float, float, float]
 SHOULDER_OFFSET_M = 0.188  # lateral offset of each shoulder from the base centre
 STANDOFFS_M = tuple(round(0.45 + 0.025 * i, 3) for i in range(15))  # 0.45 .. 0.80
 IDEAL_STANDOFF_M = 0.60
 TRAVEL_WEIGHT = 0.25
-ARM_PENETRATION_TOLERANCE_M = 0.01
+PICK, PLACE = "pick", "place"
+#: Grasp solutions tried per base pose when the approach or departure has none near it.
+IK_ATTEMPTS = 3
+Relative = tuple[Vec3, Quat]
 
 
 @dataclass(frozen=True)
 class ReachablePose:
-    """A base pose with the arm, grasp and joint angles that reach the point from it."""
+    """A base pose with the arm, grasp and checked joint angles that reach the point.
+
+    Picking: `pre_joints` pre-grasp, `joints` grasp, `post_joints` lift (holding it).
+    Placing: `pre_joints` above the spot, `joints` place, `post_joints` retreat (empty).
+    `relative` is the object's pose in the tool frame, as grasped / as it will be held.
+    """
 
     base: BasePose
     arm: str
     grasp: str
     joints: dict[str, float]
     pre_joints: dict[str, float]
+    post_joints: dict[str, float]
+    relative: Relative
+    #: Every motion between these configurations is a free straight joint-space path.
+    straight: bool = True
 
     def describe(self) -> str:
         x, y, yaw = self.base
         return f"base ({x:.2f}, {y:.2f}, {math.degrees(yaw):.0f} deg) {self.arm} arm {self.grasp}"
 
 
+REJECTIONS = {"footprint": "base inside fixed geometry", "ik": "out of the arm's reach (IK)",
+              "arm collision": "arm or object would hit something"}
+
+
 class CostmapLocation:
     """Base poses from which one of `arms` reaches `point` (an object's bottom centre)
     with one of the grasps in `grasp_heights` (grasp -> tool height above the point,
-    in order of preference)."""
+    in order of preference), to pick `obj` up there or (`purpose=PLACE`) to put it down
+    there, held as `relative` (its pose in the tool frame)."""
 
-    def __init__(self, point: Vec3, grasp_heights: Mapping[str, float],
-                 arms: Sequence[str] = ARMS, ignore: Sequence[str] = (),
+    def __init__(self, point: Vec3, grasp_heights: Mapping[str, float], obj: str,
+                 arms: Sequence[str] = ARMS, purpose: str = PICK,
+                 orientation: Quat = (0.0, 0.0, 0.0, 1.0), relative: Relative | None = None,
                  angle_step_deg: float = 10.0, max_ik_checks: int = 24):
+        if purpose not in (PICK, PLACE):
+            raise ValueError(f"purpose must be {PICK!r} or {PLACE!r}")
+        if purpose == PLACE and relative is None:
+            raise ValueError("placing needs the object's pose in the tool frame (relative)")
         self.point = point
         self.grasp_heights = dict(grasp_heights)
+        self.obj = obj
         self.arms = list(arms)
         self.grasps = list(self.grasp_heights)
-        self.ignore = set(ignore)
+        self.purpose = purpose
+        self.orientation = orientation
+        self.relative = relative
         self.angle_step_deg = angle_step_deg
         self.max_ik_checks = max_ik_checks
-        self.rejected: dict[str, int] = {"footprint": 0, "ik": 0, "arm collision": 0}
+        self.rejected: dict[str, int] = dict.fromkeys(REJECTIONS, 0)
 
     def candidates(self, ctx: RobotContext) -> list[tuple[float, BasePose, str, str]]:
         here = ctx.modules.base_pose()
@@ -87,75 +126,180 @@ class CostmapLocation:
         return out
 
     def ground(self, ctx: RobotContext) -> Iterator[ReachablePose]:
-        """Checked candidates, best first (lazily: work is done as they are asked for)."""
+        """Checked candidates, best first (lazily: work is done as they are asked for).
+        Candidates whose motions between configurations need a planned detour (a straight
+        joint-space path collides) come after all the others."""
         ik_checks = 0
+        detours = []
         for _, base, arm, grasp in self.candidates(ctx):
             if not ctx.checker.is_free(*base):
                 self.rejected["footprint"] += 1
                 continue
             if ik_checks >= self.max_ik_checks:
-                return
+                break
             ik_checks += 1
-            solution = self.reach_from(ctx, base, arm, grasp)
-            if solution is None:
-                self.rejected["ik"] += 1
+            reach = self.reach_from(ctx, base, arm, grasp)
+            if reach is None:
                 continue
-            if not arm_clear(ctx, base, solution.joints, self.ignore):
-                self.rejected["arm collision"] += 1
-                continue
-            yield solution
+            if reach.straight:
+                yield reach
+            else:
+                detours.append(reach)
+        yield from detours
 
     def reach_from(self, ctx: RobotContext, base: BasePose, arm: str,
                    grasp: str) -> ReachablePose | None:
-        """IK for the grasp and pre-grasp from one base pose (None if out of reach)."""
-        ik = arm_ik(arm)
-        seed = ctx.modules.joint_positions(ik.joint_names)
+        """Every configuration for one base pose, solved and checked (None if one fails)."""
         height = self.grasp_heights[grasp]
         target = tool_pose(grasp, self.point, height, base[2])
-        solution = ik.solve(in_base_frame(target, base), ctx.rng, seed,
-                            preferred_torso_m=TORSO_UP_M)
-        if solution is None:
-            return None
-        pre = tool_pose(grasp, self.point, height, base[2], PREGRASP_OFFSET_M)
-        pre_solution = ik.solve(in_base_frame(pre, base), ctx.rng, solution.joints,
-                                preferred_torso_m=solution.joints.get("torso_lift_joint"))
-        if pre_solution is None:
-            return None
-        return ReachablePose(base, arm, grasp, solution.joints, pre_solution.joints)
+        if self.purpose == PICK:
+            relative = relative_pose(target, self.point, self.orientation)
+            pre = tool_pose(grasp, self.point, height, base[2], PREGRASP_OFFSET_M,
+                            PREGRASP_RISE_M)
+            post = raised(target, LIFT_M)
+            # (pose, holding it?) in the order the checks are cheapest to fail
+            poses = {"joints": (target, False), "pre_joints": (pre, False),
+                     "post_joints": (post, True)}
+        else:
+            relative = self.relative
+            pre = raised(target, LIFT_M)
+            post = tool_pose(grasp, self.point, height, base[2], PREGRASP_OFFSET_M,
+                             RETREAT_RISE_M)
+            poses = {"joints": (target, True), "pre_joints": (pre, True),
+                     "post_joints": (post, False)}
+        torso = ctx.modules.joint_positions([TORSO_JOINT])[TORSO_JOINT]
+        checks = ConfigurationChecks(ctx, base, arm, self.obj, relative)
+        # keep the torso where it is (it moves at 1.3 cm/s); if that is out of reach or
+        # collides, and the torso is not at the table-setting height, let it move there
+        keep = [torso] + ([None] if abs(torso - TORSO_UP_M) > 0.01 else [])
+        for index, fixed in enumerate(keep):
+            solved = self._solve(ctx, arm, grasp, base, fixed, poses)
+            last = index == len(keep) - 1
+            if solved is None:
+                if last:
+                    self.rejected["ik"] += 1
+                    return None
+                continue
+            with ctx.collisions.preserved([self.obj, *held(ctx)]):
+                free = all(checks.free(solved[key], holding)
+                           for key, (_, holding) in poses.items())
+            if free:
+                break
+            if last:
+                self.rejected["arm collision"] += 1
+                return None
+        with ctx.collisions.preserved([self.obj, *held(ctx)]):
+            torso_after = solved["post_joints"][TORSO_JOINT]
+            park = (carry_joints(ctx, arm, grasp, height, torso_after) if self.purpose == PICK
+                    else {**PARK_JOINTS[arm], TORSO_JOINT: torso_after})
+            if park is None or not checks.free(park, self.purpose == PICK):
+                self.rejected["arm collision"] += 1
+                return None
+            # the motions the actions will make, each a straight joint-space path?
+            pre, at, post = solved["pre_joints"], solved["joints"], solved["post_joints"]
+            if self.purpose == PICK:
+                arrive = {**PARK_JOINTS[arm], TORSO_JOINT: torso}
+                legs = [(arrive, pre, False), (pre, at, False), (at, post, True),
+                        (post, park, True)]
+            else:
+                arrive = carry_joints(ctx, arm, grasp, height, torso) or pre
+                legs = [(arrive, pre, True), (pre, at, True), (at, post, False),
+                        (post, park, False)]
+            straight = all(checks.path_free(a, b, holding) for a, b, holding in legs)
+        ctx.ik_seeds[(arm, grasp, self.purpose)] = solved["joints"]
+        return ReachablePose(base, arm, grasp, at, pre, post, relative, straight)
+
+    def _solve(self, ctx: RobotContext, arm: str, grasp: str, base: BasePose,
+               torso: float | None, poses: dict[str, tuple[pin.SE3, bool]],
+               ) -> dict[str, dict[str, float]] | None:
+        """IK for the grasp (the torso fixed at `torso`, or None: free, drawn toward the
+        table-setting height), then the approach and departure from it on the same torso;
+        if those fail from one grasp solution, from another one (a few tries)."""
+        ik = arm_ik(arm)
+        seed = ctx.ik_seeds.get((arm, grasp, self.purpose))
+        local = {key: in_base_frame(pose, base) for key, (pose, _) in poses.items()}
+        for attempt in range(IK_ATTEMPTS):
+            start = seed if attempt == 0 else None
+            at = (ik.solve(local["joints"], ctx.rng, start, fixed_torso_m=torso)
+                  if torso is not None
+                  else ik.solve(local["joints"], ctx.rng, start, preferred_torso_m=TORSO_UP_M))
+            if at is None:
+                return None  # out of reach: other starts will not help
+            solved = {"joints": at.joints}
+            for key in ("pre_joints", "post_joints"):
+                near = ik.solve(local[key], ctx.rng, at.joints, restarts=1,
+                                fixed_torso_m=at.joints[TORSO_JOINT])
+                if near is None:
+                    break
+                solved[key] = near.joints
+            else:
+                return solved
+        return None
 
     def describe_rejections(self) -> str:
         """What was checked and why it failed, for failure messages."""
         total = sum(self.rejected.values())
         if not total:
             return ""
-        why = {"footprint": "base inside fixed geometry", "ik": "out of the arm's reach (IK)",
-               "arm collision": "arm would hit something"}
-        parts = ", ".join(f"{n} {why[k]}" for k, n in self.rejected.items() if n)
+        parts = ", ".join(f"{n} {REJECTIONS[k]}" for k, n in self.rejected.items() if n)
         return (f"{total} base poses {STANDOFFS_M[0]:.2f}-{STANDOFFS_M[-1]:.2f} m away "
                 f"({'/'.join(self.arms)} arm, {'/'.join(self.grasps)} grasp): {parts}")
 
 
-def arm_clear(ctx: RobotContext, base: BasePose, joints: dict[str, float],
-              ignore: set[str]) -> bool:
-    """No robot link penetrates fixed geometry or an item (other than `ignore`) when the
-    robot stands at `base` with `joints` (checked in the world, then restored)."""
-    world, robot = ctx.world, ctx.world.robot
-    saved_base = robot.base_pose()
-    saved = robot.joint_positions(list(joints))
-    robot.set_base_pose(*base)
-    robot.set_joint_positions(joints)
-    try:
-        p.performCollisionDetection(physicsClientId=world.client)
-        others = [world.environment] + [o.body for n, o in world.objects.items()
-                                        if n not in ignore and n not in held(ctx)]
-        for body in others:
-            points = p.getClosestPoints(robot.body, body, 0.0, physicsClientId=world.client)
-            if any(pt[8] < -ARM_PENETRATION_TOLERANCE_M for pt in points):
-                return False
-        return True
-    finally:
-        robot.set_base_pose(*saved_base)
-        robot.set_joint_positions(saved)
+def carry_joints(ctx: RobotContext, arm: str, grasp: str, grasp_height: float,
+                 torso_m: float) -> dict[str, float] | None:
+    """The arm's joints (torso kept) that carry an object grasped with `grasp` upright in
+    front of the robot (see `carry_pose`); None if the arm cannot. Solved once per world
+    (a fixed seed: the same every time)."""
+    key = ("carry", arm, grasp, round(grasp_height, 3), round(torso_m, 3))
+    cache = ctx.world.cache
+    if key not in cache:
+        seed = {**PARK_JOINTS[arm], TORSO_JOINT: torso_m}
+        solution = arm_ik(arm).solve(carry_pose(grasp, grasp_height, arm),
+                                     np.random.default_rng(0), seed, fixed_torso_m=torso_m)
+        cache[key] = None if solution is None else solution.joints
+    return cache[key]
+
+
+class ConfigurationChecks:
+    """Checks single configurations of one arm (and the torso) at a base pose, holding the
+    object or not; the object being manipulated may be touched when not held."""
+
+    def __init__(self, ctx: RobotContext, base: BasePose, arm: str, obj: str,
+                 relative: Relative | None):
+        self.ctx = ctx
+        self.base = base
+        self.names = [TORSO_JOINT, *arm_joint_names(arm)]
+        self.held = [HeldObject(obj, tool_frame(arm), relative)] if relative else []
+        self.obj = obj
+        self._scenes: dict[bool, object] = {}
+
+    def _scene(self, holding: bool):
+        ctx = self.ctx
+        if holding not in self._scenes:
+            ctx.world.robot.set_base_pose(*self.base)
+            others = ctx.held_objects()  # already in the other hand
+            self._scenes[holding] = ctx.collisions.scene(
+                self.names, (self.held if holding else []) + others,
+                ignore=() if holding else (self.obj,))
+        ctx.world.robot.set_base_pose(*self.base)
+        return self._scenes[holding]
+
+    def _vector(self, joints: dict[str, float]) -> np.ndarray:
+        return np.array([joints[n] for n in self.names])
+
+    def free(self, joints: dict[str, float], holding: bool) -> bool:
+        return self._scene(holding).is_free(self._vector(joints))
+
+    def path_free(self, start: dict[str, float], goal: dict[str, float], holding: bool) -> bool:
+        """Is the straight joint-space path between two checked configurations free?
+        (Checked at every other step: it only ranks candidates; the motion itself is
+        checked at every step when it is executed.)"""
+        limits = self.ctx.limits
+        a = self._vector(start)
+        b = limits.unwrap_goal(self.names, a, self._vector(goal))
+        dense, _ = densify(np.vstack([a, b]), 2 * limits.max_steps(self.names))
+        return self._scene(holding).states_free(dense[1:-1])
 
 
 def held(ctx: RobotContext) -> set[str]:

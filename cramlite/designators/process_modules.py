@@ -1,37 +1,44 @@
 """Process modules: what executes motion designators on a robot.
 
-`ProcessModules` is the interface a real robot's drivers would implement; the
-simulated set moves the PR2 kinematically in a PyBullet world (as PyCRAM's BulletWorld
-does) and carries attached objects along with the gripper.
+`ProcessModules` is the interface a real robot's drivers would implement: it receives
+timed, collision-checked trajectories (planned by the motion designators) and follows
+them. The simulated set moves the PR2 kinematically through every state of a trajectory
+in a PyBullet world (as PyCRAM's BulletWorld does, but never jumping to a goal) and
+carries attached objects along with the gripper.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from cramlite.motion.ik import tool_frame
+from cramlite.motion.trajectory import BaseTrajectory, JointTrajectory
 from cramlite.world.bodies import Quat, Vec3
 from cramlite.world.bullet import p
-from cramlite.world.world import World
+from cramlite.world.world import TIME_STEP_S, World
 
 BasePose = tuple[float, float, float]
+#: Called with the index of each state right after the robot reached it.
+StateObserver = Callable[[int], None] | None
+#: A settling object is at rest below these speeds.
+REST_LINEAR_M_S = 0.005
+REST_ANGULAR_RAD_S = 0.05
+SETTLE_CHUNK_STEPS = 6
 
 
 class ProcessModules(ABC):
     """Executes atomic motions. Implement this to drive another (or a real) robot."""
 
     @abstractmethod
-    def move_base(self, waypoints: Sequence[BasePose]) -> None:
-        """Drive through the waypoints (x, y, yaw) in order."""
+    def execute_base_trajectory(self, trajectory: BaseTrajectory,
+                                on_state: StateObserver = None) -> None:
+        """Drive through the trajectory's poses (x, y, yaw) at its times."""
 
     @abstractmethod
-    def move_joints(self, joints: dict[str, float]) -> None:
-        """Move arm and torso joints to the given angles (radians / metres)."""
-
-    @abstractmethod
-    def move_gripper(self, arm: str, state: str) -> None:
-        """Open or close a gripper (`state` is "open" or "close")."""
+    def execute_joint_trajectory(self, trajectory: JointTrajectory,
+                                 on_state: StateObserver = None) -> None:
+        """Move the trajectory's joints (arm, torso, gripper) through its states."""
 
     @abstractmethod
     def attach(self, arm: str, obj: str) -> None:
@@ -42,7 +49,7 @@ class ProcessModules(ABC):
         """Let go of the object."""
 
     @abstractmethod
-    def settle(self, seconds: float) -> None:
+    def settle(self, seconds: float, objects: Sequence[str] = ()) -> None:
         """Let the world come to rest (a real robot just waits)."""
 
     @abstractmethod
@@ -60,13 +67,8 @@ class ProcessModules(ABC):
         """Where a gripper's tool frame is (forward kinematics of the measured joints)."""
 
 
-GRIPPER_JOINTS = ("gripper_l_finger_joint", "gripper_r_finger_joint",
-                  "gripper_l_finger_tip_joint", "gripper_r_finger_tip_joint")
-GRIPPER_OPEN, GRIPPER_CLOSED = 0.5, 0.0
-
-
 class SimulatedProcessModules(ProcessModules):
-    """Kinematic execution in a PyBullet `World`."""
+    """Kinematic execution in a PyBullet `World`, state by state."""
 
     def __init__(self, world: World):
         self.world = world
@@ -78,20 +80,23 @@ class SimulatedProcessModules(ProcessModules):
             p.setCollisionFilterGroupMask(self.robot.body, link, 0, 0,
                                           physicsClientId=self.client)
 
-    def move_base(self, waypoints: Sequence[BasePose]) -> None:
-        for x, y, yaw in waypoints:
-            self.robot.set_base_pose(x, y, yaw)
-        self._carry()
+    def execute_base_trajectory(self, trajectory: BaseTrajectory,
+                                on_state: StateObserver = None) -> None:
+        for i, (x, y, yaw) in enumerate(trajectory.poses):
+            self.robot.set_base_pose(float(x), float(y), float(yaw))
+            self._carry()
+            if on_state is not None:
+                on_state(i)
 
-    def move_joints(self, joints: dict[str, float]) -> None:
-        self.robot.set_joint_positions(joints)
-        self._carry()
-
-    def move_gripper(self, arm: str, state: str) -> None:
-        value = GRIPPER_OPEN if state == "open" else GRIPPER_CLOSED
-        prefix = arm[0]
-        self.robot.set_joint_positions({f"{prefix}_{j}": value for j in GRIPPER_JOINTS
-                                        if f"{prefix}_{j}" in self.robot.joint_index})
+    def execute_joint_trajectory(self, trajectory: JointTrajectory,
+                                 on_state: StateObserver = None) -> None:
+        indices = [self.robot.joint_index[n] for n in trajectory.names]
+        for i, state in enumerate(trajectory.positions):
+            p.resetJointStatesMultiDof(self.robot.body, indices, [[float(v)] for v in state],
+                                       physicsClientId=self.client)
+            self._carry()
+            if on_state is not None:
+                on_state(i)
 
     def attach(self, arm: str, obj: str) -> None:
         body = self.world.objects[obj]
@@ -109,10 +114,22 @@ class SimulatedProcessModules(ProcessModules):
         pos, orn = body.pose()
         body.set_pose(pos, orn)  # zero velocities after the mass change
 
-    def settle(self, seconds: float) -> None:
+    def settle(self, seconds: float, objects: Sequence[str] = ()) -> None:
+        """Step physics until `objects` are at rest (or `seconds` have passed)."""
         joints = self.robot.joint_positions()
-        self.world.step(seconds)
-        self.robot.set_joint_positions(joints)  # undo any sag of the unactuated arms
+        bodies = [self.world.objects[n].body for n in objects]
+        steps = max(1, round(seconds / TIME_STEP_S))
+        done, resting = 0, 0
+        while done < steps:
+            chunk = min(SETTLE_CHUNK_STEPS, steps - done)
+            for _ in range(chunk):
+                p.stepSimulation(physicsClientId=self.client)
+            done += chunk
+            resting = resting + 1 if bodies and all(_at_rest(b, self.client)
+                                                    for b in bodies) else 0
+            if resting >= 2:  # at rest over two checks, not at the top of a bounce
+                break
+        self.robot.set_joint_positions(joints)  # undo any sag of the unactuated joints
         self._carry()
 
     def base_pose(self) -> BasePose:
@@ -132,3 +149,9 @@ class SimulatedProcessModules(ProcessModules):
             tool = self.robot.link_pose(tool_frame(arm))
             pos, orn = p.multiplyTransforms(*tool, *relative)
             self.world.objects[obj].set_pose(pos, orn)
+
+
+def _at_rest(body: int, client: int) -> bool:
+    linear, angular = p.getBaseVelocity(body, physicsClientId=client)
+    return (sum(v * v for v in linear) ** 0.5 < REST_LINEAR_M_S
+            and sum(v * v for v in angular) ** 0.5 < REST_ANGULAR_RAD_S)

@@ -20,6 +20,7 @@ from ompl import geometric as og
 from ompl import util as ou
 
 from cramlite.motion.footprint import FootprintChecker
+from cramlite.motion.trajectory import MAX_BASE_STEP_M, MAX_BASE_TURN_RAD, wrap_angle
 
 BasePose = tuple[float, float, float]  # x, y, yaw
 
@@ -31,8 +32,9 @@ class BasePlannerOptions:
     #: (~60 ms here, paths ~8 % shorter on detours).
     full_simplify: bool = False
     simplify_time_s: float = 0.05
-    #: Distance between executed waypoints (metres of xy travel).
-    waypoint_spacing_m: float = 0.05
+    #: Distance / turn between executed waypoints (every one is checked).
+    waypoint_spacing_m: float = MAX_BASE_STEP_M
+    waypoint_turn_rad: float = MAX_BASE_TURN_RAD
     #: State-validity checking resolution, as a fraction of the space's extent.
     check_resolution: float = 0.002
 
@@ -48,11 +50,6 @@ class BasePath:
 
 def path_length_m(waypoints: Sequence[BasePose]) -> float:
     return float(sum(math.dist(a[:2], b[:2]) for a, b in itertools.pairwise(waypoints)))
-
-
-def wrap_angle(a: float) -> float:
-    """Into [-pi, pi) (OMPL's SE2 bound: a yaw of exactly pi is out of bounds)."""
-    return (a + math.pi) % (2 * math.pi) - math.pi
 
 
 class BaseMotionPlanner:
@@ -73,7 +70,10 @@ class BaseMotionPlanner:
         if all(self.checker.is_free(*p) for p in straight):
             return BasePath(straight)
         coarse = self._ompl(start, goal, int(rng.integers(1, 2**31 - 1)))
-        return None if coarse is None else BasePath(self._interpolate(coarse))
+        if coarse is None:
+            return None
+        waypoints = self._interpolate(coarse)  # every executed waypoint is checked
+        return BasePath(waypoints) if all(self.checker.is_free(*p) for p in waypoints) else None
 
     def _ompl(self, start: BasePose, goal: BasePose, seed: int) -> list[BasePose] | None:
         bounds_2d = self.checker.occupancy.bounds
@@ -115,12 +115,13 @@ class BaseMotionPlanner:
         return [(st.getX(), st.getY(), st.getYaw()) for st in path.getStates()]
 
     def _interpolate(self, coarse: Sequence[BasePose]) -> list[BasePose]:
-        """Waypoints every `waypoint_spacing_m` (and every ~10 degrees of turning)."""
+        """Waypoints every `waypoint_spacing_m` and `waypoint_turn_rad` (yaw in [-pi, pi):
+        OMPL's SE2 bound, a yaw of exactly pi is out of bounds)."""
         out = [tuple(coarse[0])]
         for a, b in itertools.pairwise(coarse):
             dyaw = wrap_angle(b[2] - a[2])
             steps = max(1, math.ceil(max(math.dist(a[:2], b[:2]) / self.options.waypoint_spacing_m,
-                                         abs(dyaw) / math.radians(10))))
+                                         abs(dyaw) / self.options.waypoint_turn_rad)))
             for i in range(1, steps + 1):
                 t = i / steps
                 out.append((a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]),

@@ -3,7 +3,8 @@
 Checking the footprint against a precomputed occupancy grid costs microseconds, where a
 PyBullet query per state would cost milliseconds (shared/PITFALLS.md). Fixed geometry
 is every environment link that rises above the floor; carried objects are extra points
-in the robot's frame.
+outlining their real footprint in the robot's frame, checked against the furniture that
+rises above their lowest point.
 """
 
 from __future__ import annotations
@@ -111,9 +112,13 @@ class FootprintChecker:
         self._sure_blocked = half_size_m - pad  # something inside the inscribed circle
         self._reach = self._sure_free
 
-    def set_carried(self, points: Sequence[Sequence[float]]) -> None:
-        """Robot-frame xy points of carried objects (empty when the hands are free)."""
+    def set_carried(self, points: Sequence[Sequence[float]],
+                    occupancy: OccupancyMap | None = None) -> None:
+        """Robot-frame xy points outlining carried objects (empty when the hands are free),
+        and the map of what they can touch at the height they are carried."""
         self.carried = np.asarray(points, dtype=float).reshape(-1, 2)
+        if occupancy is not None:
+            self.carried_occupancy = occupancy
         extent = float(np.hypot(*self.carried.T).max()) if len(self.carried) else 0.0
         self._reach = max(self._sure_free, extent + self.occupancy.margin +
                           self.occupancy.resolution)

@@ -50,6 +50,9 @@ class IKOptions:
     stall_iterations: int = 40
     #: Gain of the null-space pull toward the preferred torso height.
     torso_preference_gain: float = 0.5
+    #: A solution with an arm joint closer than this to a limit is kept only if no start
+    #: gives a better one (one away from the limits leaves room to approach and lift).
+    limit_margin_rad: float = 0.1
 
 
 @dataclass(frozen=True)
@@ -78,6 +81,9 @@ class ArmIK:
         lower, upper = self.model.lowerPositionLimit, self.model.upperPositionLimit
         self._bounded = [(i, lower[i], upper[i]) for i, cont in zip(self._idx_q, self._continuous,
                                                                        strict=True) if not cont]
+        torso_q = (int(self.model.idx_qs[self.model.getJointId(TORSO_JOINT)])
+                   if TORSO_JOINT in self.joint_names else -1)
+        self._arm_bounded = [b for b in self._bounded if b[0] != torso_q]
         self._torso = None
         if TORSO_JOINT in self.joint_names:
             jid = self.model.getJointId(TORSO_JOINT)
@@ -118,20 +124,40 @@ class ArmIK:
     # -- solving -----------------------------------------------------------------------
     def solve(self, target: pin.SE3, rng: np.random.Generator,
               seed_joints: dict[str, float] | None = None,
-              preferred_torso_m: float | None = None) -> IKSolution | None:
-        """Joint angles that put the tool frame at `target` (base frame), or None."""
+              preferred_torso_m: float | None = None,
+              fixed_torso_m: float | None = None,
+              restarts: int | None = None) -> IKSolution | None:
+        """Joint angles that put the tool frame at `target` (base frame), or None.
+
+        `fixed_torso_m`: keep the torso at this height (the PR2's torso moves at 1.3 cm/s,
+        so a solution that keeps it saves seconds of robot time)."""
         opts = self.options
+        restarts = opts.restarts if restarts is None else restarts
         starts = [self.to_q(seed_joints)] if seed_joints else []
-        while len(starts) < opts.restarts + 1:
+        while len(starts) < restarts + 1:
             starts.append(self.random_q(rng))
+        torso = None if fixed_torso_m is None or self._torso is None else self._torso
+        fallback = None
         for q0 in starts:
-            result = self._descend(q0, target, preferred_torso_m)
-            if result is not None:
+            if torso is not None:
+                q0[torso[0]] = fixed_torso_m
+            result = self._descend(q0, target, preferred_torso_m,
+                                   fixed_torso=torso is not None)
+            if result is None:
+                continue
+            if self._clear_of_limits(result.joints):
                 return result
-        return None
+            fallback = fallback or result
+        return fallback
+
+    def _clear_of_limits(self, joints: dict[str, float]) -> bool:
+        margin = self.options.limit_margin_rad
+        q = self.to_q(joints)
+        return all(lo + margin <= q[i] <= hi - margin for i, lo, hi in self._arm_bounded)
 
     def _descend(self, q: np.ndarray, target: pin.SE3,
-                 preferred_torso_m: float | None = None) -> IKSolution | None:
+                 preferred_torso_m: float | None = None,
+                 fixed_torso: bool = False) -> IKSolution | None:
         opts, model, data, fid = self.options, self.model, self.data, self.frame_id
         eye6 = np.eye(6)
         best, best_at = np.inf, 0
@@ -149,6 +175,9 @@ class ArmIK:
                 return None
             jac = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)
             jac = pin.Jlog6(error_transform) @ jac
+            if fixed_torso:
+                jac[:, self._torso[1]] = 0.0
+                preferred_torso_m = None
             pinv = jac.T @ np.linalg.inv(jac @ jac.T + opts.damping * eye6)
             v = pinv @ err
             if preferred_torso_m is not None and self._torso is not None:

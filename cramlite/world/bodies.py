@@ -41,6 +41,11 @@ class WorldObject:
         info = p.getDynamicsInfo(self.body, -1, physicsClientId=self.client)
         self._inertial = (tuple(info[3]), tuple(info[4]))
 
+    @property
+    def inertial_frame(self) -> tuple[Vec3, Quat]:
+        """The inertial frame in the item's frame (PyBullet places bodies by it)."""
+        return self._inertial
+
     def pose(self) -> tuple[Vec3, Quat]:
         """Position and orientation of the item's frame (PyBullet reports the COM frame)."""
         com_pos, com_orn = p.getBasePositionAndOrientation(self.body, physicsClientId=self.client)
@@ -79,6 +84,9 @@ class RobotBody:
         self.joint_index: dict[str, int] = {}
         self.link_index: dict[str, int] = {}
         self.joint_limits: dict[str, tuple[float, float]] = {}
+        #: Velocity limit of each joint (rad/s or m/s), from the URDF.
+        self.velocity_limits: dict[str, float] = {}
+        self.prismatic: set[str] = set()
         for j in range(p.getNumJoints(body, physicsClientId=client)):
             info = p.getJointInfo(body, j, physicsClientId=client)
             self.link_index[info[12].decode()] = j
@@ -86,8 +94,21 @@ class RobotBody:
                 name = info[1].decode()
                 self.joint_index[name] = j
                 self.joint_limits[name] = (info[8], info[9])
+                self.velocity_limits[name] = float(info[11])
+                if info[2] == p.JOINT_PRISMATIC:
+                    self.prismatic.add(name)
         base_name = p.getBodyInfo(body, physicsClientId=client)[0].decode()
         self.link_index[base_name] = -1
+        # no default velocity motors: the robot moves kinematically, and those motors cost
+        # two thirds of every physics step (shared/PITFALLS.md)
+        movable = list(self.joint_index.values())
+        p.setJointMotorControlArray(body, movable, p.VELOCITY_CONTROL,
+                                    forces=[0.0] * len(movable), physicsClientId=client)
+
+    def is_continuous(self, name: str) -> bool:
+        """A revolute joint without limits (PyBullet reports lower 0, upper -1)."""
+        lower, upper = self.joint_limits[name]
+        return name not in self.prismatic and lower > upper
 
     def set_base_pose(self, x: float, y: float, yaw: float) -> None:
         p.resetBasePositionAndOrientation(self.body, (x, y, 0.0), yaw_quat(yaw),
@@ -98,9 +119,11 @@ class RobotBody:
         return pos[0], pos[1], quat_yaw(orn)
 
     def set_joint_positions(self, positions: dict[str, float]) -> None:
-        for name, value in positions.items():
-            p.resetJointState(self.body, self.joint_index[name], value,
-                              physicsClientId=self.client)
+        """Set joints by name in one batched call."""
+        if positions:
+            p.resetJointStatesMultiDof(self.body, [self.joint_index[n] for n in positions],
+                                       [[float(v)] for v in positions.values()],
+                                       physicsClientId=self.client)
 
     def joint_positions(self, names: list[str] | None = None) -> dict[str, float]:
         names = list(self.joint_index) if names is None else names

@@ -71,6 +71,9 @@ class World:
         self.robot: RobotBody | None = None
         self.objects: dict[str, WorldObject] = {}
         self.setup: Setup | None = None
+        #: Data derived from this world's fixed geometry (occupancy maps, the collision
+        #: checker), computed once by the layers that need it and kept with the world.
+        self.cache: dict[Any, Any] = {}
 
     # -- lifetime -------------------------------------------------------------------
     def close(self) -> None:

@@ -1,0 +1,99 @@
+"""`cramlite replay`: a trace as an animated GIF, in the GUI, or checked for collisions."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from cramlite.cli.common import EXIT_OK, EXIT_PLAN_FAILED, Parser
+from cramlite.errors import UserInputError
+
+MAX_SIDE_PX = 4096
+
+
+def positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def image_side(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 16 <= value <= MAX_SIDE_PX:
+        raise argparse.ArgumentTypeError(f"expected a whole number of pixels from 16 to "
+                                         f"{MAX_SIDE_PX}, got {text!r}")
+    return value
+
+
+def cmd_replay(args: argparse.Namespace) -> int:
+    from cramlite.trace import read_trace
+
+    trace = read_trace(args.trace)
+    if not (args.out or args.gui or args.check):
+        raise UserInputError("say what to do: --out FILE.gif, --gui or --check", field="--out")
+    if args.out and not args.out.lower().endswith(".gif"):
+        raise UserInputError(f"expected a file name ending in .gif, got {args.out!r}",
+                             field="--out")
+    status = EXIT_OK
+    if args.check:
+        from cramlite.trace.replay import penetrations
+
+        found = penetrations(trace, tolerance_m=args.tolerance_cm / 100)
+        for item in found:
+            print(f"inside: {item.describe()}")
+        print(f"checked {len(trace.states)} states of {args.trace} and the motion between "
+              f"them: {'nothing' if not found else len(found)} penetrating deeper than "
+              f"{args.tolerance_cm:g} cm")
+        status = EXIT_PLAN_FAILED if found else EXIT_OK
+    if args.out:
+        from cramlite.trace.replay import frame_count, render_gif
+
+        total = frame_count(trace.duration_s, args.fps, args.speed)
+        from tqdm import tqdm
+
+        with tqdm(total=total, desc="frames", disable=not sys.stderr.isatty(),
+                  leave=False) as bar:
+            frames = render_gif(trace, args.out, args.fps, args.speed, args.width, args.height,
+                                progress=bar.update)
+        print(f"wrote {args.out}: {frames} frames, {trace.duration_s:.1f} s of robot time at "
+              f"{args.fps:g} fps, speed x{args.speed:g}")
+    if args.gui:
+        from cramlite.trace.replay import replay_gui
+
+        try:
+            replay_gui(trace, args.speed)
+        except RuntimeError as exc:  # no display
+            raise UserInputError(str(exc), field="--gui") from None
+    return status
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    replay: Parser = sub.add_parser(
+        "replay", help="replay a trace (cramlite run --trace): GIF, GUI or collision check",
+        description="Exit code 0: done (and, with --check, nothing inside anything), 1: --check "
+                    "found a penetration, 2: bad input (a malformed trace names its line).")
+    replay.add_argument("trace", help="a trace file written by `cramlite run --trace` or "
+                                      "`cramlite bench --traces`")
+    replay.add_argument("--out", help="write an animated GIF here (headless, TinyRenderer)")
+    replay.add_argument("--fps", type=positive_float, default=10.0,
+                        help="frames per second of robot time (default 10)")
+    replay.add_argument("--speed", type=positive_float, default=1.0,
+                        help="play this many times faster than the robot moved (default 1)")
+    replay.add_argument("--width", type=image_side, default=480, help="GIF width (default 480)")
+    replay.add_argument("--height", type=image_side, default=360,
+                        help="GIF height (default 360)")
+    replay.add_argument("--gui", action="store_true",
+                        help="play it in the PyBullet window (needs a display)")
+    replay.add_argument("--check", action="store_true",
+                        help="re-check every state and the motion between them: no robot "
+                             "link or held object inside the kitchen or another item")
+    replay.add_argument("--tolerance-cm", type=positive_float, default=1.0,
+                        help="penetration allowed by --check (default 1 cm: convex hulls)")
+    replay.set_defaults(func=cmd_replay)

@@ -1,0 +1,177 @@
+"""Collision-free joint-space paths for the arms (and torso) with OMPL.
+
+The straight joint-space path is tried first (checked state by state, densest where a
+collision is likeliest: bisection order). If it collides, OMPL's RRTConnect plans in the
+space of the moving joints against the same `CollisionScene`, then the path is shortened
+(vertex reduction and rope shortcutting, which keep it valid) and every state of the
+densified result is checked again, so what is executed is exactly what was checked.
+
+Joints are planned in normalised units (each joint divided by its largest allowed step),
+so one validity-checking resolution gives the trajectory's density for revolute and
+prismatic joints alike. Continuous joints are unwrapped to turn the short way.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from ompl import base as ob
+from ompl import geometric as og
+from ompl import util as ou
+
+from cramlite.motion.collision import CollisionScene
+from cramlite.motion.trajectory import JointLimits, densify
+
+#: OMPL plans keeping this much further from obstacles than the final check requires, so
+#: the densified path (whose states lie between OMPL's) passes that check.
+PLANNING_MARGIN_M = 0.003
+
+
+@dataclass(frozen=True)
+class ArmPlannerOptions:
+    """Settings of the joint-space planner (pyroboplan style: options beside the solver)."""
+
+    time_limit_s: float = 1.0
+    #: Try the straight joint-space path before sampling.
+    try_straight: bool = True
+    #: Shorten a sampled path (OMPL's vertex reduction).
+    shorten: bool = True
+    #: OMPL checks motions every this many allowed steps (the densified result is then
+    #: checked at every step): coarser sampling plans faster.
+    check_every_steps: float = 2.0
+    #: The OMPL planner class (og.<name>) and its range in allowed steps (0: default).
+    planner: str = "RRTConnect"
+    range_steps: float = 0.0
+
+
+@dataclass(frozen=True)
+class JointPath:
+    """A checked polyline in joint space: vertices (k x n); `planned` if OMPL made it."""
+
+    names: tuple[str, ...]
+    vertices: np.ndarray
+    planned: bool
+    checks: int = 0
+
+
+def bisection_order(n: int) -> list[int]:
+    """0..n-1 ordered so the middle comes first, then the quarters, ... (collisions in the
+    middle of a motion are found after few checks)."""
+    order, seen = [], set()
+    queue = [(0, n - 1)]
+    while queue:
+        nxt = []
+        for lo, hi in queue:
+            if lo > hi:
+                continue
+            mid = (lo + hi) // 2
+            if mid not in seen:
+                seen.add(mid)
+                order.append(mid)
+            nxt += [(lo, mid - 1), (mid + 1, hi)]
+        queue = nxt
+    return order
+
+
+class ArmMotionPlanner:
+    """Plans joint-space paths for a set of joints in one `CollisionScene`."""
+
+    def __init__(self, limits: JointLimits, options: ArmPlannerOptions | None = None):
+        self.limits = limits
+        self.options = options or ArmPlannerOptions()
+
+    def states_free(self, scene: CollisionScene, states: np.ndarray) -> bool:
+        """Every state free (exact checks in bisection order, stopping at the first
+        collision)."""
+        return scene.states_free(states, bisection_order(len(states)))
+
+    def plan(self, scene: CollisionScene, start: Sequence[float], goal: Sequence[float],
+             rng: np.random.Generator) -> JointPath | None:
+        """A collision-free path from start to goal (joint order of the scene), or None.
+        The start is where the robot is and is not checked; the goal is."""
+        names = tuple(scene.joints)
+        start = np.asarray(start, dtype=float)
+        goal = self.limits.unwrap_goal(names, start, np.asarray(goal, dtype=float))
+        steps = self.limits.max_steps(names)
+        before = scene.checks
+        if not scene.is_free(goal):
+            return None
+        if self.options.try_straight:
+            dense, _ = densify(np.vstack([start, goal]), steps)
+            if self.states_free(scene, dense[1:-1]):
+                return JointPath(names, np.vstack([start, goal]), False, scene.checks - before)
+        seed = int(rng.integers(1, 2**31 - 1))
+        # First OMPL checks its motions coarsely and keeps a margin, so the densified
+        # result (checked at every step) passes; if the start or goal lies within the
+        # margin, or the result fails, it plans again checking every step, no margin.
+        for every, margin in ((self.options.check_every_steps, PLANNING_MARGIN_M), (1.0, 0.0)):
+            if margin and not (scene.is_free(start, margin) and scene.is_free(goal, margin)):
+                continue
+            vertices = self._ompl(scene, start, goal, steps, seed, every, margin)
+            if vertices is None:
+                continue
+            dense, _ = densify(vertices, steps)
+            if self.states_free(scene, dense[1:]):
+                return JointPath(names, vertices, True, scene.checks - before)
+        return None
+
+    def _bounds(self, names: Sequence[str], start: np.ndarray, goal: np.ndarray,
+                ) -> tuple[np.ndarray, np.ndarray]:
+        lower, upper = [], []
+        for i, name in enumerate(names):
+            if name in self.limits.continuous:
+                lo, hi = min(start[i], goal[i]) - math.pi, max(start[i], goal[i]) + math.pi
+            else:
+                lo, hi = self.limits.lower[name], self.limits.upper[name]
+                lo, hi = min(lo, start[i], goal[i]), max(hi, start[i], goal[i])
+            lower.append(lo)
+            upper.append(hi)
+        return np.array(lower), np.array(upper)
+
+    def _ompl(self, scene: CollisionScene, start: np.ndarray, goal: np.ndarray,
+              steps: np.ndarray, seed: int, check_every: float,
+              margin: float) -> np.ndarray | None:
+        n = len(start)
+        lower, upper = self._bounds(scene.joints, start, goal)
+        space = ob.RealVectorStateSpace(n)
+        bounds = ob.RealVectorBounds(n)
+        for i in range(n):  # normalised units: one unit = one allowed step of that joint
+            bounds.setLow(i, float(lower[i] / steps[i]))
+            bounds.setHigh(i, float(upper[i] / steps[i]))
+        space.setBounds(bounds)
+        si = ob.SpaceInformation(space)
+
+        def valid(state) -> bool:
+            return scene.is_free([state[i] * steps[i] for i in range(n)], margin)
+
+        si.setStateValidityChecker(valid)
+        si.setStateValidityCheckingResolution(check_every / space.getMaximumExtent())
+        si.setup()
+        s, g = si.allocState(), si.allocState()
+        for i in range(n):
+            s[i] = float(start[i] / steps[i])
+            g[i] = float(goal[i] / steps[i])
+        pdef = ob.ProblemDefinition(si)
+        pdef.setStartAndGoalStates(s, g)
+        ou.setLogLevel(ou.LOG_NONE)  # failures are reported by the caller, not on stdout
+        ou.RNG.setSeed(seed)  # see base_planner: the reseed takes effect
+        planner = getattr(og, self.options.planner)(si)
+        if self.options.range_steps:
+            planner.setRange(self.options.range_steps)
+        planner.setProblemDefinition(pdef)
+        planner.setup()
+        status = planner.solve(self.options.time_limit_s)
+        ou.setLogLevel(ou.LOG_WARN)
+        if status.getStatus() != ob.PlannerStatus.EXACT_SOLUTION:
+            return None
+        path = pdef.getSolutionPath()
+        if self.options.shorten:
+            simplifier = og.PathSimplifier(si)
+            simplifier.reduceVertices(path)
+        # copy the floats out: the states are borrowed from objects that go away
+        out = np.array([[st[i] * steps[i] for i in range(n)] for st in path.getStates()])
+        out[0], out[-1] = start, goal
+        return out

@@ -1,0 +1,299 @@
+"""Is a robot configuration collision-free? Checked in the robot's PyBullet world.
+
+A `CollisionScene` fixes what one motion query moves (a set of joints, the objects held
+in the grippers) and what it may touch (the object being manipulated). A state is free
+when no moving robot link is inside the kitchen or inside an item other than the
+manipulated one, and no held object is inside the kitchen or another item, each
+allowing `tolerance_m` of penetration (PyBullet uses convex hulls of the PR2's meshes).
+
+Only links that move can newly collide, so only they are checked (PITFALLS: the arm's
+links are ~4x cheaper than the whole robot). A broadphase of axis-aligned boxes (the
+links' AABBs against the obstacles' boxes, one numpy test) leaves PyBullet's exact
+query (`getClosestPoints`, which reports penetrations even with the robot's collision
+filter off) to the few link-obstacle pairs that can touch.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from cramlite.world.bodies import Quat, Vec3
+from cramlite.world.bullet import p
+
+#: Penetration allowed for the convex-hull approximation of the robot's meshes.
+PENETRATION_TOLERANCE_M = 0.01
+
+
+@dataclass(frozen=True)
+class HeldObject:
+    """An object that moves with a robot link (a gripper's tool frame)."""
+
+    name: str
+    link: str  #: the robot link it is attached to
+    relative: tuple[Vec3, Quat]  #: its pose in that link's frame
+
+
+@dataclass(frozen=True)
+class Contact:
+    """A penetration found by `CollisionScene.contacts` (for messages and tests)."""
+
+    what: str  #: robot link or held object
+    other: str  #: environment link or item
+    depth_m: float
+
+    def describe(self) -> str:
+        return f"{self.what} {self.depth_m * 100:.1f} cm inside {self.other}"
+
+
+class CollisionChecker:
+    """Builds collision scenes in one world (robot, environment, items).
+
+    Every robot link with a collision shape gets a bounding sphere in its own frame
+    (from its box at the zero configuration), the broadphase of every scene."""
+
+    def __init__(self, world, tolerance_m: float = PENETRATION_TOLERANCE_M):
+        self.world = world
+        self.client = world.client
+        self.robot = world.robot
+        self.tolerance_m = tolerance_m
+        body, client = self.robot.body, self.client
+        count = p.getNumJoints(body, physicsClientId=client)
+        self._parent = {j: p.getJointInfo(body, j, physicsClientId=client)[16]
+                        for j in range(count)}
+        self.link_names = {j: p.getJointInfo(body, j, physicsClientId=client)[12].decode()
+                           for j in range(count)}
+        self._has_shape = {j for j in range(count)
+                           if p.getCollisionShapeData(body, j, physicsClientId=client)}
+        self._moving_links_cache: dict[frozenset[str], list[int]] = {}
+        self.spheres = self._link_spheres()
+
+    def _link_spheres(self) -> dict[int, tuple[np.ndarray, float]]:
+        """Link -> (centre in the link frame, radius) of a sphere that holds its shape."""
+        robot, client = self.robot, self.client
+        out = {}
+        with self.preserved():
+            robot.set_base_pose(0.0, 0.0, 0.0)
+            robot.set_joint_positions(dict.fromkeys(robot.joint_index, 0.0))
+            for link in sorted(self._has_shape):
+                lo, hi = p.getAABB(robot.body, link, physicsClientId=client)
+                state = p.getLinkState(robot.body, link, computeForwardKinematics=True,
+                                       physicsClientId=client)
+                rotation = np.array(p.getMatrixFromQuaternion(state[5])).reshape(3, 3)
+                corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                                    for z in (lo[2], hi[2])])
+                local = (corners - np.asarray(state[4])) @ rotation
+                centre = local.mean(axis=0)
+                out[link] = (centre, float(np.linalg.norm(local - centre, axis=1).max()))
+        return out
+
+    # -- what moves ------------------------------------------------------------------------
+    def moving_links(self, joints: Sequence[str]) -> list[int]:
+        """Links with collision shapes that move when any of `joints` moves."""
+        key = frozenset(joints)
+        if key not in self._moving_links_cache:
+            roots = {self.robot.joint_index[n] for n in joints}
+            out = []
+            for link in self._parent:
+                j = link
+                while j >= 0 and j not in roots:
+                    j = self._parent[j]
+                if j >= 0 and link in self._has_shape:
+                    out.append(link)
+            self._moving_links_cache[key] = out
+        return self._moving_links_cache[key]
+
+    def scene(self, joints: Sequence[str], held: Sequence[HeldObject] = (),
+              ignore: Sequence[str] = ()) -> CollisionScene:
+        """A scene for motions of `joints` carrying `held`, allowed to touch `ignore`."""
+        return CollisionScene(self, list(joints), list(held), set(ignore))
+
+    # -- robot state, saved and restored ---------------------------------------------------
+    @contextlib.contextmanager
+    def preserved(self, objects: Sequence[str] = ()) -> Iterator[None]:
+        """Restore the robot's base and joints (and these objects' poses) afterwards."""
+        robot = self.robot
+        base = robot.base_pose()
+        joints = robot.joint_positions()
+        poses = {n: self.world.objects[n].pose() for n in objects}
+        try:
+            yield
+        finally:
+            robot.set_base_pose(*base)
+            robot.set_joint_positions(joints)
+            for name, (pos, orn) in poses.items():
+                self.world.objects[name].set_pose(pos, orn)
+
+
+def rotate(quaternions: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """Rotate vectors (N x 3) by quaternions (N x 4, x y z w), row by row
+    (v + 2w (u x v) + 2 u x (u x v), written out: np.cross costs ten times more)."""
+    ux, uy, uz, w = quaternions.T
+    vx, vy, vz = vectors.T
+    cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    dx, dy, dz = uy * cz - uz * cy, uz * cx - ux * cz, ux * cy - uy * cx
+    return np.column_stack([vx + 2 * (w * cx + dx), vy + 2 * (w * cy + dy),
+                            vz + 2 * (w * cz + dz)])
+
+
+class CollisionScene:
+    """One motion query's collision problem; `is_free(q)` checks a joint vector.
+
+    Parts are spheres attached to robot links: one per moving link with a shape, one per
+    held object (attached to its gripper's tool frame). Obstacles are boxes: the
+    environment's links and the items that are neither held nor ignored."""
+
+    def __init__(self, checker: CollisionChecker, joints: list[str], held: list[HeldObject],
+                 ignore: set[str]):
+        world, robot = checker.world, checker.robot
+        self.checker = checker
+        self.client = checker.client
+        self.body = robot.body
+        self.joints = joints
+        self.joint_indices = [robot.joint_index[n] for n in joints]
+        self.tolerance_m = checker.tolerance_m
+        links = checker.moving_links(joints)
+        # a body's pose in PyBullet is its inertial frame's: compose it in once
+        self.held = [(world.objects[h.name].body, robot.link_index[h.link], h,
+                      p.multiplyTransforms(*h.relative, *world.objects[h.name].inertial_frame))
+                     for h in held]
+        self.query_links = list(dict.fromkeys([*links, *(link for _, link, _, _ in self.held)]))
+        row = {link: i for i, link in enumerate(self.query_links)}
+        # parts: (row of its link in the link-state query, sphere centre, radius, body, link)
+        rows, centres, radii, self.parts = [], [], [], []
+        for link in links:
+            centre, radius = checker.spheres[link]
+            rows.append(row[link])
+            centres.append(centre)
+            radii.append(radius)
+            self.parts.append((checker.link_names[link], self.body, link))
+        for body, link, h, _ in self.held:
+            ex, ey, ez = world.objects[h.name].extents
+            rel = np.array(p.getMatrixFromQuaternion(h.relative[1])).reshape(3, 3)
+            rows.append(row[link])
+            centres.append(np.asarray(h.relative[0]) + rel @ np.array([0.0, 0.0, ez / 2]))
+            radii.append(0.5 * float(np.linalg.norm([ex, ey, ez])))
+            self.parts.append((repr(h.name), body, -1))
+        self._rows = np.array(rows, dtype=int)
+        self._centres = np.array(centres, dtype=float).reshape(-1, 3)
+        self._radii_sq = (np.array(radii, dtype=float) ** 2)[:, None]
+        held_names = {h.name for h in held}
+        # obstacles: every environment link with a shape, every item not held or ignored
+        obstacles: list[tuple[int, int, str]] = []
+        boxes = []
+        for name, index in world.environment_links.items():
+            if not p.getCollisionShapeData(world.environment, index, physicsClientId=self.client):
+                continue
+            obstacles.append((world.environment, index, name))
+            boxes.append(world.link_bounds(index))
+        for name, obj in world.objects.items():
+            if name in held_names or name in ignore:
+                continue
+            obstacles.append((obj.body, -1, repr(name)))
+            boxes.append(obj.aabb())
+        self.obstacles = obstacles
+        arr = np.array(boxes, dtype=float).reshape(-1, 2, 3)
+        self._lo, self._hi = arr[:, 0, :], arr[:, 1, :]
+        self.checks = 0
+
+    def set_state(self, q: Sequence[float]) -> None:
+        """Put the robot's moving joints at q (held objects follow in `_place_held`)."""
+        p.resetJointStatesMultiDof(self.body, self.joint_indices, [[float(v)] for v in q],
+                                   physicsClientId=self.client)
+
+    def _place_held(self) -> None:
+        for body, link, _, relative in self.held:
+            state = p.getLinkState(self.body, link, computeForwardKinematics=True,
+                                   physicsClientId=self.client)
+            pos, orn = p.multiplyTransforms(state[4], state[5], *relative)
+            p.resetBasePositionAndOrientation(body, pos, orn, physicsClientId=self.client)
+
+    def _link_frames(self) -> tuple[list, list]:
+        states = p.getLinkStates(self.body, self.query_links, computeForwardKinematics=True,
+                                 physicsClientId=self.client)
+        return [s[4] for s in states], [s[5] for s in states]
+
+    def _overlaps(self, positions: np.ndarray, orientations: np.ndarray) -> np.ndarray:
+        """Broadphase for S states at once: positions (S x links x 3) and orientations
+        (S x links x 4) of the queried links -> mask (S x parts x obstacles) of the part
+        spheres that reach into obstacle boxes."""
+        s = len(positions)
+        pos = positions[:, self._rows].reshape(-1, 3)
+        orn = orientations[:, self._rows].reshape(-1, 4)
+        centres = pos + rotate(orn, np.tile(self._centres, (s, 1)))
+        c = centres[:, None, :]
+        gap = np.maximum(np.maximum(self._lo - c, c - self._hi), 0.0)
+        near = (gap * gap).sum(axis=2) < np.tile(self._radii_sq, (s, 1))
+        return near.reshape(s, len(self._rows), len(self._lo))
+
+    def _pairs(self) -> np.ndarray:
+        """(part, obstacle) index pairs whose sphere and box overlap (the broadphase)."""
+        if not len(self._rows):
+            return np.zeros((0, 2), dtype=int)
+        pos, orn = self._link_frames()
+        return np.argwhere(self._overlaps(np.array([pos]), np.array([orn]))[0])
+
+    def states_free(self, states: np.ndarray, order: Sequence[int] | None = None) -> bool:
+        """Every state (rows of joint vectors) free: one broadphase for all of them, then
+        exact checks of the states that need one, in `order` (default: as given)."""
+        self.checks += len(states)
+        if not len(states) or not len(self._rows):
+            return True
+        positions, orientations = [], []
+        for q in states:
+            self.set_state(q)
+            pos, orn = self._link_frames()
+            positions.append(pos)
+            orientations.append(orn)
+        near = self._overlaps(np.array(positions), np.array(orientations))
+        flagged = set(np.flatnonzero(near.any(axis=(1, 2))).tolist())
+        for i in (order if order is not None else range(len(states))):
+            if i not in flagged:
+                continue
+            self.set_state(states[i])
+            if self.held:
+                self._place_held()
+            for part, k in np.argwhere(near[i]):
+                if self._depth(int(part), int(k)) > self.tolerance_m:
+                    return False
+        return True
+
+    def _depth(self, part: int, k: int) -> float:
+        _, body, link = self.parts[part]
+        other, other_link, _ = self.obstacles[k]
+        points = p.getClosestPoints(body, other, 0.0, linkIndexA=link, linkIndexB=other_link,
+                                    physicsClientId=self.client)
+        return max((-pt[8] for pt in points), default=0.0)
+
+    def is_free(self, q: Sequence[float], margin_m: float = 0.0) -> bool:
+        """No penetration deeper than the tolerance (less `margin_m`) at joint vector q
+        (left set)."""
+        self.checks += 1
+        self.set_state(q)
+        pairs = self._pairs()
+        if not len(pairs):
+            return True
+        if self.held:
+            self._place_held()
+        limit = self.tolerance_m - margin_m
+        return all(self._depth(int(i), int(k)) <= limit for i, k in pairs)
+
+    def contacts(self, q: Sequence[float] | None = None) -> list[Contact]:
+        """Every penetration deeper than the tolerance (at q, or where the robot is)."""
+        if q is not None:
+            self.set_state(q)
+        self._place_held()
+        out = []
+        for i, k in self._pairs():
+            depth = self._depth(int(i), int(k))
+            if depth > self.tolerance_m:
+                out.append(Contact(self.parts[i][0], self.obstacles[k][2], depth))
+        return sorted(out, key=lambda c: -c.depth_m)
+
+    def current(self) -> np.ndarray:
+        """The moving joints' current values."""
+        states = p.getJointStates(self.body, self.joint_indices, physicsClientId=self.client)
+        return np.array([s[0] for s in states])

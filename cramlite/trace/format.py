@@ -1,0 +1,176 @@
+"""The trace format `cramlite-trace/1`: every executed state of a trial, JSON Lines.
+
+Line 1 is a header:
+    {"format": "cramlite-trace/1", "setup": <name or absolute path load_setup accepts>,
+     "plan": ..., "strategy": ..., "seed": ..., "joints": [PR2 joint names, order of "q"],
+     "world_joints": [the world's movable joints, order of "w"]}
+then one line per executed state, in order:
+    {"t": robot time since the plan started (s, non-decreasing), "base": [x, y, yaw],
+     "q": [...], "w": [...], "held": {object: arm},
+     "objects": {name: [x, y, z, qx, qy, qz, qw]},
+     "action": {"name": "PickUpAction", "object": "cup"} or null}
+
+`joints` lists the joints cramlite moves (torso, both arms, the grippers' fingers); the
+others keep their default. Reading validates every line and names the one at fault.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, Any
+
+from cramlite.errors import UserInputError
+
+TRACE_FORMAT = "cramlite-trace/1"
+HEADER_KEYS = ("format", "setup", "plan", "strategy", "seed", "joints", "world_joints")
+STATE_KEYS = ("t", "base", "q", "w", "held", "objects", "action")
+DIGITS = 6
+
+
+class TraceError(UserInputError):
+    """A trace file that is missing or malformed (names the line)."""
+
+
+class TraceWriter:
+    """Writes a trace line by line (the header first)."""
+
+    def __init__(self, path: str | Path, header: dict[str, Any]):
+        missing = [k for k in HEADER_KEYS if k not in header and k != "format"]
+        if missing:
+            raise ValueError(f"trace header misses {missing}")
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.joints = list(header["joints"])
+        self.world_joints = list(header["world_joints"])
+        self._handle: IO[str] | None = self.path.open("w", encoding="utf-8")
+        self._write({"format": TRACE_FORMAT, **{k: header[k] for k in HEADER_KEYS[1:]}})
+        self.states = 0
+        self.last_t = 0.0
+
+    def _write(self, record: dict[str, Any]) -> None:
+        assert self._handle is not None, "trace already closed"
+        self._handle.write(json.dumps(record, separators=(",", ":"), allow_nan=False) + "\n")
+
+    def write_state(self, t: float, base: Sequence[float], q: Sequence[float],
+                    w: Sequence[float], held: dict[str, str],
+                    objects: dict[str, Sequence[float]],
+                    action: tuple[str, str | None] | None) -> None:
+        self._write({
+            "t": round(t, DIGITS), "base": [round(v, DIGITS) for v in base],
+            "q": [round(v, DIGITS) for v in q], "w": [round(v, DIGITS) for v in w],
+            "held": dict(held),
+            "objects": {n: [round(v, DIGITS) for v in pose] for n, pose in objects.items()},
+            "action": None if action is None else {"name": action[0], "object": action[1]}})
+        self.states += 1
+        self.last_t = t
+
+    def close(self) -> None:
+        if self._handle is not None:
+            self._handle.close()
+            self._handle = None
+
+
+@dataclass(frozen=True)
+class Trace:
+    header: dict[str, Any]
+    states: list[dict[str, Any]]
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.states[-1]["t"]) if self.states else 0.0
+
+
+def _numbers(value: Any, n: int | None) -> bool:
+    return (isinstance(value, list) and (n is None or len(value) == n)
+            and all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+                    for v in value))
+
+
+def read_trace(path: str | Path) -> Trace:
+    """Read and validate a trace; a problem raises TraceError naming the line."""
+    path = Path(path)
+    src = str(path)
+    try:
+        handle = path.open(encoding="utf-8")
+    except OSError as exc:
+        raise TraceError(f"cannot read trace ({exc.strerror})", source=src) from None
+    header: dict[str, Any] | None = None
+    states: list[dict[str, Any]] = []
+    last_t = -math.inf
+    with handle:
+        try:
+            for number, line in enumerate(handle, start=1):
+                where = f"line {number}"
+
+                def fail(message: str, where: str = where) -> TraceError:
+                    return TraceError(message, source=src, field=where)
+
+                if not line.strip():
+                    raise fail("empty line; expected one JSON object per line")
+                try:
+                    record = json.loads(line)
+                except json.JSONDecodeError as exc:
+                    raise fail(f"not valid JSON ({exc.msg})") from None
+                if not isinstance(record, dict):
+                    raise fail("expected a JSON object")
+                if header is None:
+                    header = _check_header(record, fail)
+                    continue
+                _check_state(record, header, fail)
+                if record["t"] < last_t:
+                    raise fail(f"t = {record['t']} goes back in time (previous {last_t}); "
+                               "expected non-decreasing robot time")
+                last_t = record["t"]
+                states.append(record)
+        except UnicodeDecodeError:
+            raise TraceError("not UTF-8 text; expected JSON Lines", source=src) from None
+    if header is None:
+        raise TraceError("empty file; expected a cramlite-trace/1 header line", source=src)
+    return Trace(header, states)
+
+
+def _check_header(record: dict[str, Any], fail) -> dict[str, Any]:
+    if record.get("format") != TRACE_FORMAT:
+        raise fail(f"expected a header with \"format\": \"{TRACE_FORMAT}\", got "
+                   f"{json.dumps(record.get('format'))}")
+    missing = [k for k in HEADER_KEYS if k not in record]
+    if missing:
+        raise fail(f"header misses {', '.join(missing)}")
+    if not isinstance(record["setup"], str) or not record["setup"]:
+        raise fail("header field setup: expected a setup name or path")
+    for key in ("joints", "world_joints"):
+        value = record[key]
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise fail(f"header field {key}: expected a list of joint names")
+    return record
+
+
+def _check_state(record: dict[str, Any], header: dict[str, Any], fail) -> None:
+    missing = [k for k in STATE_KEYS if k not in record]
+    if missing:
+        raise fail(f"state misses {', '.join(missing)}; expected {', '.join(STATE_KEYS)}")
+    t = record["t"]
+    if not (isinstance(t, int | float) and not isinstance(t, bool) and math.isfinite(t)
+            and t >= 0):
+        raise fail(f"t: expected a time >= 0 in seconds, got {json.dumps(t)}")
+    if not _numbers(record["base"], 3):
+        raise fail("base: expected [x, y, yaw]")
+    if not _numbers(record["q"], len(header["joints"])):
+        raise fail(f"q: expected {len(header['joints'])} numbers (the header's joints)")
+    if not _numbers(record["w"], len(header["world_joints"])):
+        raise fail(f"w: expected {len(header['world_joints'])} numbers (the header's "
+                   "world_joints)")
+    held = record["held"]
+    if not isinstance(held, dict) or not all(isinstance(v, str) for v in held.values()):
+        raise fail("held: expected {object: arm}")
+    objects = record["objects"]
+    if not isinstance(objects, dict) or not all(_numbers(v, 7) for v in objects.values()):
+        raise fail("objects: expected {name: [x, y, z, qx, qy, qz, qw]}")
+    action = record["action"]
+    if action is not None and not (isinstance(action, dict) and isinstance(action.get("name"),
+                                                                          str)):
+        raise fail("action: expected null or {\"name\": ..., \"object\": ...}")

@@ -1,0 +1,134 @@
+"""The trace format (cramlite-trace/1): round trip, validation, replay as GIF and check."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from cramlite.trace import TRACE_FORMAT, TraceError, TraceWriter, read_trace
+from cramlite.trace.replay import frame_count
+from tests.conftest import run_cli
+
+JOINTS = ["torso_lift_joint", "r_shoulder_pan_joint"]
+OBJECTS = {"cup": [1.45, 0.85, 0.85, 0.0, 0.0, 0.0, 1.0]}
+
+
+def header(**extra) -> dict:
+    return {"setup": "v1", "plan": "set-table", "strategy": "opm", "seed": 3,
+            "joints": JOINTS, "world_joints": [], **extra}
+
+
+def write(path: Path, states: list[tuple[float, list[float]]]) -> Path:
+    writer = TraceWriter(path, header())
+    for t, base in states:
+        writer.write_state(t, base, [0.25, -1.7], [], {}, OBJECTS, ("NavigateAction", "cup"))
+    writer.close()
+    return path
+
+
+def test_round_trip(tmp_path: Path) -> None:
+    path = write(tmp_path / "t.jsonl", [(0.0, [-0.5, -1.8, 1.5708]), (0.5, [-0.5, -1.3, 1.5708])])
+    lines = path.read_text().splitlines()
+    assert json.loads(lines[0]) == {"format": TRACE_FORMAT, **header()}
+    trace = read_trace(path)
+    assert trace.header["joints"] == JOINTS and len(trace.states) == 2
+    assert trace.states[1] == {"t": 0.5, "base": [-0.5, -1.3, 1.5708], "q": [0.25, -1.7],
+                               "w": [], "held": {}, "objects": OBJECTS,
+                               "action": {"name": "NavigateAction", "object": "cup"}}
+    assert trace.duration_s == 0.5
+
+
+GOOD_STATE = {"t": 0.0, "base": [0, 0, 0], "q": [0.25, -1.7], "w": [], "held": {},
+              "objects": OBJECTS, "action": None}
+
+
+@pytest.mark.parametrize("lines, line, expected", [
+    ([], None, "empty file"),
+    (["{not json"], 1, "not valid JSON"),
+    ([{"format": "other/1"}], 1, "cramlite-trace/1"),
+    ([{"format": TRACE_FORMAT, "setup": "v1"}], 1, "header misses"),
+    ([header(format=TRACE_FORMAT), {**GOOD_STATE, "q": [1.0]}], 2, "q: expected 2 numbers"),
+    ([header(format=TRACE_FORMAT), {**GOOD_STATE, "t": -1}], 2, "t: expected a time"),
+    ([header(format=TRACE_FORMAT), GOOD_STATE, {**GOOD_STATE, "t": 2.0},
+      {**GOOD_STATE, "t": 1.0}], 4, "goes back in time"),
+    ([header(format=TRACE_FORMAT), {k: v for k, v in GOOD_STATE.items() if k != "held"}], 2,
+     "state misses held"),
+    ([header(format=TRACE_FORMAT), {**GOOD_STATE, "objects": {"cup": [1, 2]}}], 2,
+     "objects: expected"),
+    ([header(format=TRACE_FORMAT), {**GOOD_STATE, "base": [0, 0, float("nan")]}], 2,
+     "base: expected"),
+])
+def test_malformed_traces_name_the_line(tmp_path: Path, lines, line, expected) -> None:
+    path = tmp_path / "bad.jsonl"
+    path.write_text("".join((x if isinstance(x, str) else json.dumps(x)) + "\n" for x in lines))
+    with pytest.raises(TraceError, match=expected) as info:
+        read_trace(path)
+    assert info.value.field == (f"line {line}" if line else None)
+    result = run_cli("replay", str(path), "--check")
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    assert str(path) in result.stderr and expected.split(":")[0] in result.stderr
+
+
+def test_replay_writes_a_gif_with_one_frame_per_tenth_of_robot_time(tmp_path: Path) -> None:
+    from PIL import Image
+
+    states = [(0.25 * i, [-0.5, -1.8 + 0.1 * i, math.pi / 2]) for i in range(7)]  # 1.5 s
+    path = write(tmp_path / "short.jsonl", states)
+    out = tmp_path / "short.gif"
+    result = run_cli("replay", str(path), "--out", str(out))
+    assert result.returncode == 0, result.stderr
+    assert frame_count(1.5, 10, 1) == 16
+    with Image.open(out) as gif:
+        assert gif.n_frames == 16
+        assert gif.info["duration"] == 100
+        gif.seek(0)
+        first = gif.convert("RGB").tobytes()
+        gif.seek(15)
+        assert gif.convert("RGB").tobytes() != first  # the robot moved
+    fast = tmp_path / "fast.gif"
+    assert run_cli("replay", str(path), "--out", str(fast), "--speed", "3").returncode == 0
+    with Image.open(fast) as gif:
+        assert gif.n_frames == frame_count(1.5, 10, 3) == 6
+
+
+def test_replay_check_finds_the_robot_inside_the_island(tmp_path: Path) -> None:
+    inside = write(tmp_path / "inside.jsonl", [(0.0, [-0.3, 1.3, math.pi]),
+                                               (1.0, [-0.9, 1.3, math.pi])])
+    result = run_cli("replay", str(inside), "--check")
+    print(result.stdout)
+    assert result.returncode == 1
+    assert "base_link 56.5 cm inside island at t = 1.00 s (line 3)" in result.stdout
+    clear = write(tmp_path / "clear.jsonl", [(0.0, [-0.2, -1.8, math.pi / 2]),
+                                             (1.0, [-0.2, -1.0, math.pi / 2])])
+    result = run_cli("replay", str(clear), "--check")
+    assert result.returncode == 0 and "nothing penetrating" in result.stdout
+
+
+@pytest.mark.parametrize("args, expected", [
+    (["--out", "x.png"], "ending in .gif"),
+    ([], "say what to do"),
+    (["--out", "x.gif", "--fps", "0"], "positive number"),
+    (["--out", "x.gif", "--width", "100000"], "pixels"),
+])
+def test_replay_bad_options_exit_2(tmp_path: Path, args, expected) -> None:
+    path = write(tmp_path / "t.jsonl", [(0.0, [-0.5, -1.8, 0.0])])
+    result = run_cli("replay", str(path), *args, cwd=tmp_path)
+    assert result.returncode == 2
+    assert expected in result.stderr and "Traceback" not in result.stderr
+
+
+def test_run_writes_a_trace_the_replay_accepts(tmp_path: Path) -> None:
+    trace = tmp_path / "v2.jsonl"
+    result = run_cli("run", "v2", "--strategy", "opm", "--trace", str(trace), "--json")
+    assert result.returncode == 0, result.stderr
+    data = json.loads(result.stdout)
+    recorded = read_trace(trace)
+    assert recorded.header["setup"] == "v2" and recorded.header["strategy"] == "opm"
+    assert recorded.duration_s == pytest.approx(data["drive_s"] + data["arm_s"], rel=0.01)
+    assert {"drive_s", "arm_s", "actions"} <= set(data)
+    names = {node["name"] for node in data["actions"]}
+    assert {"ParkArmsAction", "MoveTorsoAction", "TransportAction"} <= names
