@@ -29,7 +29,8 @@ def item_candidate(ctx: RobotContext, setup: Setup, name: str,
     spec = setup.item(name)
     (x, y, z), _ = ctx.modules.object_pose(name)
     return Candidate(name=name, position=(x, y, z), category=spec.category,
-                     contained=spec.contained, then_at=then_at)
+                     contained=spec.contained, then_at=then_at,
+                     metadata={"type": spec.type, "aliases": spec.aliases})
 
 
 def robot_position(ctx: RobotContext) -> tuple[float, float, float]:

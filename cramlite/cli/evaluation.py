@@ -56,6 +56,15 @@ def _load_episodes(args: argparse.Namespace):
 
 
 
+def _sha256(args: argparse.Namespace) -> str | None:
+    """The data file's hash, for learned strategies (their own file: the test split)."""
+    if not args.strategy.startswith("learned:"):
+        return None
+    from cramlite.learning.scoring import file_sha256
+
+    return file_sha256(args.data)
+
+
 def cmd_evaluate(args: argparse.Namespace) -> int:
 
     from cramlite.evaluation.evaluate import evaluate
@@ -67,7 +76,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         with progress_bar(len(episodes), "evaluate") as bar:
             result = evaluate(episodes, args.strategy, params, args.dims, args.form, args.metric,
                               args.repeats, args.seed, progress=bar.update,
-                              protocol=args.protocol)
+                              protocol=args.protocol, data_sha256=_sha256(args))
     except ValueError as exc:  # e.g. expected-ape with a strategy that has memory
         raise UserInputError(str(exc), field="--metric") from None
     with quiet_broken_pipe():

@@ -73,6 +73,12 @@ def random_expectation(episode: Episode, metric: str, protocol: str = "heldout",
 def score_episode(make: Callable[[np.random.Generator], Strategy], episode: Episode,
                   metric: str, repeats: int, rng: np.random.Generator,
                   protocol: str = "heldout") -> float:
+    if protocol == "thesis" and metric in ("ape", "expected-ape"):
+        learned = getattr(make(rng), "learned", None)
+        if learned is not None:  # learned models: unrestricted predictions (thesis 3.3.4)
+            from cramlite.learning.scoring import thesis_ape
+
+            return thesis_ape(learned, episode, repeats, rng)
     if metric == "ape":
         return sampled_ape(make, episode, repeats, rng, protocol)
     if metric == "expected-ape":
@@ -136,13 +142,23 @@ def evaluate(episodes: Sequence[Episode], strategy: str = "opm",
              params: Mapping[str, float] | None = None, dims: str = "xy", form: str = "power",
              metric: str = "ape", repeats: int = 100, seed: int = 0, axis_weights: Any = None,
              progress: Callable[[int], None] | None = None,
-             protocol: str = "heldout") -> Evaluation:
+             protocol: str = "heldout", data_sha256: str | None = None) -> Evaluation:
     """Score `strategy` on every episode (the per-episode generators follow `seed`).
 
     The `random` strategy is scored by its expectation (a function of the episode only),
-    not by sampling: a median of random orders would read like a better baseline."""
+    not by sampling: a median of random orders would read like a better baseline. A
+    learned model under `heldout` is scored on its test episodes when `data_sha256` is
+    its training file's hash."""
     is_reference(protocol)  # validates the name
     make = strategy_factory(strategy, params, dims, form, axis_weights)
+    scope = "all episodes"
+    if strategy.startswith("learned:"):
+        from cramlite.learning.scoring import episodes_to_score
+
+        given = len(episodes)
+        episodes = episodes_to_score(strategy, episodes, protocol, data_sha256)
+        if len(episodes) < given:
+            scope = "the model's test split"
     expectation = is_random(strategy)
     scores, baselines, exact_base, scored, skipped, exact = [], [], True, [], [], []
     for index, episode in enumerate(episodes):
@@ -166,6 +182,7 @@ def evaluate(episodes: Sequence[Episode], strategy: str = "opm",
         exact_base &= base_exact
     settings = {"params": dict(params or {}), "dims": dims, "form": form, "repeats": repeats,
                 "seed": seed, "protocol": protocol}
+    settings["scored"] = scope
     kind = "expectation" if expectation else ("exact" if metric == "expected-ape" else
                                               "sampled")
     return Evaluation(strategy, metric, scores, scored, baselines, exact_base, settings,
