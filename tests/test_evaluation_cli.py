@@ -36,13 +36,18 @@ def write_bad(tmp_path: Path, name: str, change) -> Path:
     return path
 
 
-@pytest.mark.parametrize("command", ["evaluate", "fit"])
+COMMAND_ARGS = {"evaluate": [], "fit": ["--out", "{tmp}/out"],
+                "train": ["--model", "cpt", "--out", "{tmp}/m.model"],
+                "compare": ["--strategies", "opm,nearest"]}
+
+
+@pytest.mark.parametrize("command", list(COMMAND_ARGS))
 @pytest.mark.parametrize(("name", "change", "expected"), BAD_FILES,
                          ids=[b[0] for b in BAD_FILES])
 def test_bad_data_files_exit_2_with_one_line(tmp_path, command, name, change,
                                              expected) -> None:
     path = write_bad(tmp_path, name, change)
-    extra = ["--out", str(tmp_path / "out")] if command == "fit" else []
+    extra = [a.format(tmp=tmp_path) for a in COMMAND_ARGS[command]]
     result = run_cli(command, str(path), *extra)
     print(result.stderr)
     assert result.returncode == 2
@@ -51,10 +56,12 @@ def test_bad_data_files_exit_2_with_one_line(tmp_path, command, name, change,
     assert str(path) in lines[0] and expected in lines[0]
 
 
-def test_fit_refuses_an_out_path_that_is_a_file(tmp_path) -> None:
+@pytest.mark.parametrize("command", ["fit", "compare"])
+def test_out_path_that_is_a_file_is_refused(tmp_path, command) -> None:
     target = tmp_path / "results"
     target.write_text("not a folder")
-    result = run_cli("fit", "table-setting", "--out", str(target))
+    extra = ["--strategies", "opm,nearest"] if command == "compare" else []
+    result = run_cli(command, "table-setting", *extra, "--out", str(target))
     assert result.returncode == 2 and len(result.stderr.strip().splitlines()) == 1
     assert f"{target}: --out: expected a folder" in result.stderr
 

@@ -218,3 +218,23 @@ def test_compare_command_writes_figure_and_paired_tests(models, slice_csv, tmp_p
     assert set(summary["wilcoxon_vs_first"]) == {f"learned:{models['nn']}",
                                                  f"learned:{models['cpt']}"}
     assert (out / "error_distributions.png").stat().st_size > 5000
+
+
+@pytest.mark.parametrize(("blocked", "call", "expected"), [
+    ("keras", "train_model(DATA, 'nn', OUT)", "training needs keras and jax"),
+    ("cpt", "load_model(CPT)", "CPT models need the `cpt` package"),
+])
+def test_without_the_extra_one_line_says_how_to_install(models, tmp_path, blocked, call,
+                                                        expected) -> None:
+    import subprocess
+    import sys
+    code = (f"import sys; sys.modules[{blocked!r}] = None\n"
+            "from cramlite.learning.train import train_model\n"
+            "from cramlite.learning.modelfile import load_model\n"
+            f"DATA = {str(DATA)!r}; OUT = {str(tmp_path / 'x.model')!r}; "
+            f"CPT = {str(models['cpt'])!r}\n"
+            "from cramlite.learning.backend import MissingExtraError\n"
+            f"try:\n    {call}\nexcept MissingExtraError as exc:\n    print(exc)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert expected in done.stdout and "pip install 'cramlite[learn]'" in done.stdout, \
+        done.stdout + done.stderr
