@@ -1,7 +1,8 @@
-"""Benchmark: the full OPM grid search on the table-setting data (xy and xyz, 100 repeats,
-1,100 grid points per projection as in Table 3.4). Target: median < 60 s wall.
+"""Benchmark: full grid fits on the table-setting data (xy and xyz, 100 repeats, 1,100
+grid points per projection as in Table 3.4) for `opm`, `opm-2step` and `optimal`.
+Target: median < 60 s wall per fit on this 2-core machine.
 
-Run: .venv/bin/python benchmarks/bench_fit.py [--runs 5]
+Run: .venv/bin/python benchmarks/bench_fit.py [--runs 5] [--strategies opm,opm-2step,optimal]
 """
 
 from __future__ import annotations
@@ -22,20 +23,25 @@ DATA = shipped_data_path("table-setting")
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--strategies", default="opm,opm-2step,optimal")
+    parser.add_argument("--protocol", default="heldout")
     args = parser.parse_args()
-    times = []
-    for run in range(args.runs):
-        start = time.perf_counter()
-        episodes, _ = load_episodes(DATA)
-        with tqdm(total=2 * len(episodes), desc=f"fit run {run + 1}", unit="ep") as bar:
-            result = fit(episodes, "opm", dims=["xy", "xyz"], metric="ape", repeats=100,
-                         seed=run, progress=bar.update)
-        times.append(time.perf_counter() - start)
-        dims, index = result.best()
-        print(f"run {run + 1}: {times[-1]:.2f} s, best {dims} {result.params(index)} "
-              f"mean {result.means(dims)[index]:.3f}")
-    print(f"full grid (2 x {len(result.configs)} points, 186 episodes, 100 repeats): "
-          f"median {statistics.median(times):.2f} s wall (target < 60 s)")
+    for strategy in args.strategies.split(","):
+        times = []
+        for run in range(args.runs):
+            start = time.perf_counter()
+            episodes, _ = load_episodes(DATA)
+            with tqdm(total=2 * len(episodes), desc=f"fit {strategy} run {run + 1}",
+                      unit="ep", leave=False) as bar:
+                result = fit(episodes, strategy, dims=["xy", "xyz"], metric="ape",
+                             repeats=100, seed=run, progress=bar.update,
+                             protocol=args.protocol)
+            times.append(time.perf_counter() - start)
+            dims, index = result.best()
+            print(f"{strategy} run {run + 1}: {times[-1]:.2f} s, best {dims} "
+                  f"{result.params(index)} mean {result.means(dims)[index]:.3f}")
+        print(f"{strategy}: full grid (2 x {len(result.configs)} points, 186 episodes, "
+              f"100 repeats): median {statistics.median(times):.2f} s wall (target < 60 s)")
 
 
 if __name__ == "__main__":

@@ -7,6 +7,8 @@ question) and transport it. A failed item is reported and the plan goes on.
 
 from __future__ import annotations
 
+import math
+
 from cramlite.plans.report import PlanReport
 
 from cramlite.designators import (
@@ -17,6 +19,7 @@ from cramlite.designators import (
     RobotContext,
     TransportAction,
 )
+from cramlite.designators.locations import IDEAL_STANDOFF_M
 from cramlite.strategies import Candidate, Strategy
 from cramlite.world.pr2 import TORSO_UP_M
 from cramlite.world.setup import Setup
@@ -25,11 +28,27 @@ from cramlite.world.setup import Setup
 def item_candidate(ctx: RobotContext, setup: Setup, name: str,
                    then_at: tuple[float, float, float]) -> Candidate:
     """What the strategy sees of an item: where it is now, its k category and c flag,
-    and where the robot will stand after delivering it (`then_at`)."""
+    where the robot will stand to take it (`fetch_at`) and after delivering it
+    (`then_at`)."""
     spec = setup.item(name)
     (x, y, z), _ = ctx.modules.object_pose(name)
     return Candidate(name=name, position=(x, y, z), category=spec.category,
-                     contained=spec.contained, then_at=then_at)
+                     contained=spec.contained, then_at=then_at,
+                     fetch_at=fetch_estimate(robot_position(ctx), (x, y)),
+                     metadata={"type": spec.type, "aliases": spec.aliases})
+
+
+def fetch_estimate(robot: tuple[float, float, float], item_xy: tuple[float, float],
+                   ) -> tuple[float, float, float]:
+    """Where the robot will stand to pick the item up, estimated without planning: at the
+    location designator's preferred stand-off from the item, on the side it comes from
+    (its candidates are ranked by stand-off and by how far the robot has to drive)."""
+    dx, dy = robot[0] - item_xy[0], robot[1] - item_xy[1]
+    distance = math.hypot(dx, dy)
+    if distance <= IDEAL_STANDOFF_M:
+        return robot
+    scale = IDEAL_STANDOFF_M / distance
+    return (item_xy[0] + dx * scale, item_xy[1] + dy * scale, 0.0)
 
 
 def robot_position(ctx: RobotContext) -> tuple[float, float, float]:

@@ -134,18 +134,35 @@ def test_random_is_a_seeded_permutation() -> None:
         run_order(make_strategy("random", rng=5), items, (0, 0, 0))
 
 
-def test_two_step_commits_to_the_second_item() -> None:
-    # From the origin "a" is best; seen from a's target (10, 0), "far" is best and the
-    # 2-step model takes it next although from where the agent then stands "b" is nearer.
-    items = [cand("a", 1, 0, then_at=(10.0, 0.0, 0.0)), cand("b", 2, 0, then_at=(0, 0, 0)),
-             cand("far", 9, 0, then_at=(0, 0, 0))]
+def test_two_step_chooses_the_second_item_from_where_the_first_is_taken() -> None:
+    # From the origin "a" is nearest. Seen from a (1, 0), "b" (3, 0) is nearer than
+    # "c" (-1.5, 0), so the 2-step model takes b next, although from the origin, where
+    # the agent stands again, c is nearer (the 1-step model takes c).
+    items = [cand("a", 1, 0), cand("b", 3, 0), cand("c", -1.5, 0)]
+    origin = (0.0, 0.0, 0.0)
+    assert run_order(make_strategy("opm-2step"), items, origin, then_at=origin) == \
+        ["a", "b", "c"]
+    assert run_order(make_strategy("opm"), items, origin, then_at=origin) == ["a", "c", "b"]
+    # where the agent stands to take a (fetch_at), not a's position, decides
+    far = [cand("a", 1, 0, fetch_at=(-3.0, 0.0, 0.0)), *items[1:]]
+    assert run_order(make_strategy("opm-2step"), far, origin, then_at=origin) == \
+        ["a", "c", "b"]
+    # pairs: the third choice is again the OPM's from where the agent stands
+    four = [*items, cand("d", 0.5, 0.5)]
+    two = make_strategy("opm-2step")
+    assert run_order(two, four, origin, then_at=origin) == ["d", "a", "c", "b"]
+
+
+def test_two_step_follows_the_observed_item() -> None:
+    # teacher forcing: the human took c first; the second choice is made from c
+    items = [cand("a", 1, 0), cand("b", 3, 0), cand("c", -1.5, 0), cand("e", -2.5, 0)]
     two = make_strategy("opm-2step")
     two.reset(items)
-    first = two.choose(items, (0, 0, 0))
-    assert first.name == "a"
-    rest = [c for c in items if c is not first]
-    assert two.choose(rest, (0, 0, 0)).name == "far"  # committed, regardless of position
-    assert make_strategy("opm").choose(rest, (0, 0, 0)).name == "b"
+    assert two.choose(items, (0, 0, 0)).name == "a"
+    two.observe(items[2])
+    rest = [items[0], items[1], items[3]]
+    assert two.choose(rest, (0, 0, 0)).name == "e"  # nearest to c, not to the origin
+    assert [c.name for c in two.taken] == ["c", "e"]
 
 
 def test_optimal_matches_brute_force() -> None:
@@ -161,7 +178,7 @@ def test_optimal_matches_brute_force() -> None:
 
 
 def test_optimal_refuses_beyond_its_limit() -> None:
-    items = [cand(f"i{i}", i, 0) for i in range(16)]
+    items = [cand(f"i{i}", i, 0, then_at=(i, 1.0, 0.0)) for i in range(16)]
     with pytest.raises(StrategyError, match="at most 15 items"):
         make_strategy("optimal").choose(items, (0, 0, 0))
 

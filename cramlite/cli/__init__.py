@@ -6,7 +6,7 @@ import argparse
 import sys
 from collections.abc import Callable, Sequence
 
-from cramlite.cli import bench, evaluation, ordering, replay, trials
+from cramlite.cli import bench, evaluation, learning, ordering, replay, trials
 from cramlite.cli.common import EXIT_BAD_INPUT, Parser
 from cramlite.errors import UserInputError
 
@@ -14,7 +14,7 @@ from cramlite.errors import UserInputError
 def build_parser() -> argparse.ArgumentParser:
     parser = Parser(prog="cramlite", description="A lightweight, ROS-free robot plan executive.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (trials, replay, ordering, evaluation, bench):
+    for module in (trials, replay, ordering, evaluation, learning, bench):
         module.register(sub)
     return parser
 

@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import sys
+from collections.abc import Iterator
+from pathlib import Path
 
 from cramlite.cli.common import (
     EXIT_OK,
@@ -14,8 +18,27 @@ from cramlite.cli.common import (
     strategy_checked,
 )
 from cramlite.errors import UserInputError
-from cramlite.evaluation.evaluate import METRICS
-from cramlite.strategies.cost import DIMS
+from cramlite.evaluation.options import DIM_NAMES, METRICS, PROTOCOLS
+
+
+@contextlib.contextmanager
+def quiet_broken_pipe() -> Iterator[None]:
+    """Output into a pipe that was closed (`... --json | head`) ends quietly."""
+    try:
+        yield
+        sys.stdout.flush()
+    except BrokenPipeError:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # the interpreter's last flush goes nowhere
+
+
+def out_folder(text: str, option: str = "--out") -> Path:
+    """A folder to write into: refuses a path that is a file."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise UserInputError("expected a folder (or a new path), got an existing file",
+                             source=text, field=option)
+    return path
 
 
 def _load_episodes(args: argparse.Namespace):
@@ -33,8 +56,16 @@ def _load_episodes(args: argparse.Namespace):
 
 
 
+def _sha256(args: argparse.Namespace) -> str | None:
+    """The data file's hash, for learned strategies (their own file: the test split)."""
+    if not args.strategy.startswith("learned:"):
+        return None
+    from cramlite.learning.scoring import file_sha256
+
+    return file_sha256(args.data)
+
+
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    import json
 
     from cramlite.evaluation.evaluate import evaluate
 
@@ -44,9 +75,17 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     try:
         with progress_bar(len(episodes), "evaluate") as bar:
             result = evaluate(episodes, args.strategy, params, args.dims, args.form, args.metric,
-                              args.repeats, args.seed, progress=bar.update)
+                              args.repeats, args.seed, progress=bar.update,
+                              protocol=args.protocol, data_sha256=_sha256(args))
     except ValueError as exc:  # e.g. expected-ape with a strategy that has memory
         raise UserInputError(str(exc), field="--metric") from None
+    with quiet_broken_pipe():
+        return _print_evaluation(args, result, bad)
+
+
+def _print_evaluation(args: argparse.Namespace, result, bad) -> int:
+    import json
+
     report = result.as_dict()
     report["skipped"] = [{"id": b.id, "reason": f"{b.field}: {b.message}"} for b in bad] + \
         report["skipped"]
@@ -59,43 +98,48 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     for row in report["per_episode"]:
         print(f"{row['id']:<12} {row['activity']:<14} {row['length']:>5} {row['score']:>12.3f} "
               f"{row['random_baseline']:>8.3f}")
-    print(f"\n{args.strategy} ({args.dims}, {args.form}) on {report['episodes']} episodes, "
-          f"metric {args.metric}: mean {report['mean']:.3f}, median {report['median']:.3f}")
+    print(f"\n{args.strategy} ({args.dims}, {args.form}, protocol {args.protocol}) on "
+          f"{report['episodes']} episodes, metric {args.metric}: mean {report['mean']:.3f}, "
+          f"median {report['median']:.3f} ({report['score_definition']})")
     for activity, summary in report["by_activity"].items():
         print(f"  {activity}: {summary['episodes']} episodes, mean {summary['mean']:.3f}, "
               f"median {summary['median']:.3f}")
     base = report["random_baseline"]
-    print(f"  random order ({'exact' if base['exact'] else 'sampled'}): mean {base['mean']:.3f},"
-          f" median {base['median']:.3f}")
+    print(f"  random baseline ({base['definition']}): mean {base['mean']:.3f}, "
+          f"median {base['median']:.3f}")
     return EXIT_OK
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
-    import json
-    from pathlib import Path
-
-    from cramlite.evaluation.evaluate import baseline_score, episode_rng
+    from cramlite.evaluation.evaluate import baseline_score
     from cramlite.evaluation.fit import fit, source_grid
     from cramlite.evaluation.report import write_fit
-    from cramlite.strategies import DIMS
 
     dims = [d.strip() for d in args.dims.split(",") if d.strip()]
     for d in dims:
-        if d not in DIMS:
+        if d not in DIM_NAMES:
             raise UserInputError(f"unknown projection {d!r}; expected a comma-separated list "
-                                 f"of {', '.join(DIMS)}", field="--dims")
+                                 f"of {', '.join(DIM_NAMES)}", field="--dims")
     strategy_checked(args.strategy, form=args.form)
+    out = out_folder(args.out)
     episodes, _ = _load_episodes(args)
     configs = source_grid(independent_mid=args.independent_mid)
     try:
         with progress_bar(len(episodes) * len(dims), f"fit {args.strategy}") as bar:
             result = fit(episodes, args.strategy, dims, args.metric, args.repeats, args.seed,
-                         args.form, configs, progress=bar.update)
+                         args.form, configs, progress=bar.update, protocol=args.protocol,
+                         workers=args.workers)
     except ValueError as exc:
         raise UserInputError(str(exc), field="--metric") from None
-    baselines = [baseline_score(ep, args.metric, episode_rng(args.seed, i))[0]
-                 for i, ep in enumerate(episodes)]
-    summary = write_fit(result, baselines, Path(args.out))
+    baselines = [baseline_score(ep, args.metric, protocol=args.protocol)[0] for ep in episodes]
+    summary = write_fit(result, baselines, out)
+    with quiet_broken_pipe():
+        return _print_fit(args, episodes, summary)
+
+
+def _print_fit(args: argparse.Namespace, episodes, summary) -> int:
+    import json
+
     if args.json:
         print(json.dumps(summary))
         return EXIT_OK
@@ -124,15 +168,15 @@ def cmd_fit(args: argparse.Namespace) -> int:
 
 
 def _add_data_arguments(p: argparse.ArgumentParser, metrics: tuple[str, ...]) -> None:
-    from cramlite.strategies import FORMS
-
     p.add_argument("data", help="CSV of recorded sequences (the published OPM format), or "
                                 "`table-setting` for the shipped 186 episodes")
     p.add_argument("--strategy", default="opm", help="strategy name (see `cramlite strategies`)")
     p.add_argument("--metric", default="ape", choices=metrics,
                    help="ape: sampled APE (median over repeats); expected-ape: its exact "
                         "expectation; edit / edit-unrestricted: normalised Damerau-Levenshtein")
-    p.add_argument("--form", default="power", choices=FORMS, help="functional form (Eq. 3.1-3.3)")
+    p.add_argument("--form", default="power", choices=("power", "additive", "product"),
+                   help="functional form (Eq. 3.1-3.3)")
+    add_protocol_argument(p)
     p.add_argument("--repeats", type=positive_int, default=100,
                    help="repeats of the random tie-breaks (default 100)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
@@ -143,11 +187,18 @@ def _add_data_arguments(p: argparse.ArgumentParser, metrics: tuple[str, ...]) ->
 
 
 
+def add_protocol_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--protocol", default="heldout", choices=PROTOCOLS,
+                   help="heldout (default): cramlite's conventions, a learned model scored on "
+                        "its test episodes only; thesis: as behind the published figures; "
+                        "reference: the published OPM code's conventions (see README)")
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     evaluate = sub.add_parser("evaluate", help="score a strategy against human sequences")
     _add_data_arguments(evaluate, METRICS)
     evaluate.add_argument("--params", help="e.g. strong_k=0.2,mid_k=0.3,food_k=1.2,c=1.7")
-    evaluate.add_argument("--dims", default="xy", choices=list(DIMS), help="projection")
+    evaluate.add_argument("--dims", default="xy", choices=DIM_NAMES, help="projection")
     evaluate.set_defaults(func=cmd_evaluate)
 
     fit_cmd = sub.add_parser("fit", help="grid-search a strategy's parameters (Table 3.4)")
@@ -158,4 +209,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                          help="grid mid k independently (0.1-1.0) instead of strong k + 0.1")
     fit_cmd.add_argument("--out", default="fit-results",
                          help="folder for surface.csv, fit.json, error_by_projection.png")
+    fit_cmd.add_argument("--workers", type=positive_int, default=os.cpu_count() or 1,
+                         help="processes for strategies scored point by point (default: "
+                              "all cores); opm, nearest, opm-2step and optimal under APE are "
+                              "vectorised over the grid")
     fit_cmd.set_defaults(func=cmd_fit)

@@ -17,6 +17,8 @@ listed is a bad row.
 from __future__ import annotations
 
 import csv
+import io
+import math
 import re
 from collections import Counter
 from collections.abc import Iterator
@@ -53,6 +55,8 @@ class Episode:
     start_positions: tuple[Position, ...]  # one per step (extra ones are dropped)
     published_baseline: float | None = None
     extra: dict[str, str] = field(default_factory=dict, compare=False)
+    #: The raw k and containment cells (the reference protocol reads them as text).
+    cells: dict[str, str] = field(default_factory=dict, compare=False)
 
     def __len__(self) -> int:
         return len(self.sequence)
@@ -85,6 +89,9 @@ def _floats(text: str, row_id: str, column: str) -> Position:
     except ValueError:
         raise DataError(f"expected numbers x,y,z, got ({text})", field=column,
                         source=f"row {row_id}") from None
+    if not all(math.isfinite(v) for v in values):
+        raise DataError(f"expected finite numbers x,y,z, got ({text})", field=column,
+                        source=f"row {row_id}")
     if len(values) == 2:
         values.append(0.0)
     if len(values) != 3:
@@ -151,26 +158,52 @@ def parse_row(row: dict[str, str]) -> Episode:
         baseline = float(row["error"]) if row.get("error") not in (None, "") else None
     except ValueError:
         raise fail("error", f"expected a number, got {row['error']!r}") from None
+    if baseline is not None and not math.isfinite(baseline):
+        raise fail("error", f"expected a finite number, got {row['error']!r}")
     known = set(REQUIRED_COLUMNS) | set(CATEGORY_COLUMNS) | {"containment", "error", "activity"}
     return Episode(id=row_id, activity=activity_of(row), sequence=sequence, items=tuple(items),
                    taken=tuple(taken), start_positions=tuple(starts[:len(sequence)]),
                    published_baseline=baseline,
-                   extra={k: v for k, v in row.items() if k not in known and k is not None})
+                   extra={k: v for k, v in row.items() if k not in known and k is not None},
+                   cells={k: row.get(k) or "" for k in (*CATEGORY_COLUMNS, "containment")})
+
+
+#: The longest field accepted (csv's own limit, said in the error message).
+MAX_FIELD_BYTES = 128 * 1024
 
 
 def iter_rows(path: str | Path) -> Iterator[dict[str, str]]:
+    """The rows of a CSV file; a file that is not UTF-8 text, not a regular file, lacks a
+    required column or holds a field over 128 KiB raises DataError naming it."""
     path = Path(path)
+    if path.is_dir():
+        raise DataError("expected a CSV file, got a folder", source=str(path))
     try:
-        handle = path.open(newline="", encoding="utf-8")
+        raw = path.read_bytes()
     except OSError as exc:
         raise DataError(f"cannot read file ({exc.strerror})", source=str(path)) from None
-    with handle:
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].count(b"\n") + 1
+        raise DataError(f"expected UTF-8 text, got byte 0x{raw[exc.start]:02x}",
+                        source=f"{path}: line {line}") from None
+    with io.StringIO(text, newline="") as handle:
         reader = csv.DictReader(handle)
-        missing = [c for c in REQUIRED_COLUMNS if c not in (reader.fieldnames or [])]
-        if missing:
-            raise DataError(f"missing column(s) {', '.join(missing)}; expected at least "
-                            f"{', '.join(REQUIRED_COLUMNS)}", source=str(path), field="header")
-        yield from reader
+        try:
+            missing = [c for c in REQUIRED_COLUMNS if c not in (reader.fieldnames or [])]
+            if missing:
+                raise DataError(f"missing column(s) {', '.join(missing)}; expected at least "
+                                f"{', '.join(REQUIRED_COLUMNS)}", source=str(path),
+                                field="header")
+            yield from reader
+        except csv.Error as exc:
+            if "field larger than field limit" in str(exc):
+                raise DataError(f"a field is longer than {MAX_FIELD_BYTES // 1024} KiB; "
+                                "expected shorter cells", source=f"{path}: line "
+                                f"{reader.line_num + 1}") from None
+            raise DataError(f"not a readable CSV file ({exc})",
+                            source=f"{path}: line {reader.line_num}") from None
 
 
 def load_episodes(path: str | Path, on_bad_row: str = "fail",

@@ -1,11 +1,12 @@
 """Grid search of strategy parameters against human sequences (thesis 3.3.2, Table 3.4).
 
-For the OPM family (memoryless, teacher-forced APE) every step's outcome depends only on
-that step, so a whole parameter grid is scored at once: per episode and step the
-distances are computed once, the costs of all grid points form one (configs x items)
-array, and only steps whose lowest cost is tied need random draws, which are shared by
-all grid points (common random numbers, the same draws `evaluate` uses). Other
-strategies are scored point by point.
+For `opm`, `nearest`, `opm-2step` and `optimal` under the teacher-forced APE, every
+step's outcome depends only on that step (the 2-step model's second choice on the item
+observed before it, `optimal` re-plans at each step), so a whole parameter grid is
+scored at once: per episode and step the costs of all grid points form one
+(configs x items) array, and only steps whose lowest cost is tied need random draws,
+which are shared by all grid points (common random numbers, the same draws `evaluate`
+uses). Other strategies and metrics are scored point by point, over worker processes.
 """
 
 from __future__ import annotations
@@ -20,9 +21,11 @@ import numpy as np
 from cramlite.evaluation.data import Episode
 from cramlite.evaluation.evaluate import episode_rng, score_episode, strategy_factory
 from cramlite.evaluation.metrics import ape_uniforms, sampled_errors
+from cramlite.evaluation.protocol import ape_steps
 from cramlite.strategies.base import StrategyError
 from cramlite.strategies.cost import DIMS
-from cramlite.strategies.opm import NearestStrategy, OPMStrategy
+from cramlite.strategies.opm import NearestStrategy, OPMStrategy, OPMTwoStepStrategy
+from cramlite.strategies.optimal import TIE_RTOL, OptimalStrategy
 from cramlite.strategies.registry import strategy_class
 
 PARAM_NAMES = ("strong_k", "mid_k", "food_k", "c")
@@ -66,83 +69,151 @@ class FitResult:
         return dict(zip(PARAM_NAMES, map(float, self.configs[index]), strict=True))
 
 
-def _vectorisable(name: str, metric: str) -> bool:
+#: Strategies whose teacher-forced steps are scored over the whole grid at once.
+VECTORISED = {OPMStrategy: "opm", NearestStrategy: "nearest", OPMTwoStepStrategy: "2step",
+              OptimalStrategy: "optimal"}
+
+
+def _vector_kind(name: str, metric: str) -> str | None:
     cls = strategy_class(name)
-    return metric in ("ape", "expected-ape") and cls in (OPMStrategy, NearestStrategy)
+    return VECTORISED.get(cls) if metric in ("ape", "expected-ape") else None
+
+
+def _cost(d: np.ndarray, k: np.ndarray, c: np.ndarray, form: str) -> np.ndarray:
+    if form == "power":
+        return np.power(d, k) * c
+    if form == "additive":
+        return d - k + c
+    return d * k * c
 
 
 def grid_probabilities(episode: Episode, configs: np.ndarray, dims: str, form: str,
-                       ignore_params: bool = False) -> np.ndarray:
-    """P(correct) per scored step and grid point: (steps, G)."""
-    items = episode.sequence_items()
-    positions = np.array([c.position for c in items], dtype=float)[:, list(DIMS[dims])]
-    category = np.array([c.category for c in items])
-    contained = np.array([c.contained for c in items])
-    names = np.array(episode.sequence)
+                       kind: str = "opm", protocol: str = "heldout") -> np.ndarray:
+    """P(correct) per scored step and grid point, (steps, G), for the teacher-forced
+    steps of `opm`, `nearest`, `opm-2step` (the second of a pair is seen from where the
+    observed first item was taken) and `optimal` (the first item of a least-cost order
+    when every trip starts from one point: argmin C(agent, j) - C(T, j))."""
+    axes = list(DIMS[dims])
+    steps = ape_steps(episode, protocol)
     g = len(configs)
-    out = np.empty((len(episode) - 1, g))
-    remaining = np.arange(len(items))
-    for step in range(len(episode) - 1):
-        agent = np.asarray(episode.start_positions[step], dtype=float)[list(DIMS[dims])]
-        diff = positions[remaining] - agent
-        d = np.sqrt((diff * diff).sum(axis=1))[None, :]
-        k = np.ones((g, len(remaining)))
-        c = np.ones((g, len(remaining)))
-        if not ignore_params:
+    out = np.empty((len(steps), g))
+    for i, step in enumerate(steps):
+        items = step.candidates
+        positions = np.array([c.position for c in items], dtype=float)[:, axes]
+        k = np.ones((g, len(items)))
+        c = np.ones((g, len(items)))
+        if kind != "nearest":
+            category = np.array([it.category for it in items])
             for col, cat in enumerate(("strong", "mid", "food")):
-                mask = category[remaining] == cat
-                k[:, mask] = configs[:, col:col + 1]
-            c[:, contained[remaining]] = configs[:, 3:4]
-        if form == "power":
-            cost = np.power(d, k) * c
-        elif form == "additive":
-            cost = d - k + c
+                k[:, category == cat] = configs[:, col:col + 1]
+            c[:, np.array([it.contained for it in items], dtype=bool)] = configs[:, 3:4]
+
+        def costs(point: Sequence[float], k=k, c=c, positions=positions) -> np.ndarray:
+            diff = positions - np.asarray(point, dtype=float)[axes]
+            return _cost(np.sqrt((diff * diff).sum(axis=1))[None, :], k, c, form)
+
+        agent: Sequence[float] = step.agent
+        if kind == "2step" and i % 2 == 1:
+            previous = steps[i - 1]
+            agent = previous.candidates[previous.observed].fetch_position()
+        cost = costs(agent)
+        if kind == "optimal":
+            afters = {it.after_position() for it in items}
+            if len(afters) != 1:
+                raise ValueError("the vectorised optimal fit needs one after-position per step")
+            cost = cost - costs(afters.pop())
+            best = cost.min(axis=1, keepdims=True)
+            tied = cost <= best + TIE_RTOL * np.maximum(np.abs(best), 1.0)
         else:
-            cost = d * k * c
-        tied = cost == cost.min(axis=1, keepdims=True)
-        hits = tied[:, names[remaining] == episode.sequence[step]].sum(axis=1)
-        out[step] = hits / tied.sum(axis=1)
-        remaining = remaining[remaining != step]
+            tied = cost == cost.min(axis=1, keepdims=True)
+        hits = tied[:, [it.name == step.observed_name for it in items]].sum(axis=1)
+        out[i] = hits / tied.sum(axis=1)
     return out
+
+
+def _vector_scores(episodes: Sequence[Episode], configs: np.ndarray, dims: str, form: str,
+                   kind: str, metric: str, repeats: int, seed: int, protocol: str,
+                   progress: Callable[[float], None] | None) -> np.ndarray:
+    table = np.zeros((len(episodes), len(configs)))
+    for e, episode in enumerate(episodes):
+        if len(episode) >= 2:
+            probs = grid_probabilities(episode, configs, dims, form, kind, protocol)
+            if metric == "expected-ape":
+                table[e] = (1.0 - probs).sum(axis=0)
+            else:
+                uniforms = ape_uniforms(episode_rng(seed, e), repeats, len(probs))
+                table[e] = np.median(sampled_errors(probs, uniforms), axis=0)
+        if progress:
+            progress(1)
+    return table
+
+
+def _score_points(task: tuple) -> np.ndarray:
+    """Worker: score grid points one by one (strategies the grid path does not cover)."""
+    episodes, strategy, rows, dims, form, metric, repeats, seed, protocol = task
+    table = np.zeros((len(episodes), len(rows)))
+    for g, row in enumerate(rows):
+        make = strategy_factory(strategy, dict(zip(PARAM_NAMES, row, strict=True)), dims, form)
+        for e, episode in enumerate(episodes):
+            try:
+                table[e, g] = score_episode(make, episode, metric, repeats,
+                                            episode_rng(seed, e), protocol)
+            except StrategyError:  # e.g. too many items for `optimal`
+                table[e, g] = np.nan
+    return table
+
+
+def _pointwise_scores(episodes: Sequence[Episode], strategy: str, configs: np.ndarray,
+                      dims: str, form: str, metric: str, repeats: int, seed: int,
+                      protocol: str, workers: int,
+                      progress: Callable[[float], None] | None) -> np.ndarray:
+    chunk = max(1, min(16, len(configs) // max(1, 4 * workers)))
+    tasks = [(list(episodes), strategy, configs[i:i + chunk], dims, form, metric, repeats,
+              seed, protocol) for i in range(0, len(configs), chunk)]
+    parts: list[np.ndarray] = []
+    if workers <= 1 or len(tasks) == 1:
+        for task in tasks:
+            parts.append(_score_points(task))
+            if progress:
+                progress(len(episodes) * len(task[2]) / len(configs))
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        context = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+            for task, part in zip(tasks, pool.map(_score_points, tasks), strict=True):
+                parts.append(part)
+                if progress:
+                    progress(len(episodes) * len(task[2]) / len(configs))
+    return np.hstack(parts)
 
 
 def fit(episodes: Sequence[Episode], strategy: str = "opm", dims: Sequence[str] = ("xy",),
         metric: str = "ape", repeats: int = 100, seed: int = 0, form: str = "power",
         configs: np.ndarray | None = None,
-        progress: Callable[[int], None] | None = None) -> FitResult:
-    """Score every grid point for each projection; scores are per episode."""
+        progress: Callable[[float], None] | None = None, protocol: str = "heldout",
+        workers: int = 1) -> FitResult:
+    """Score every grid point for each projection; scores are per episode.
+
+    `opm`, `nearest`, `opm-2step` and `optimal` under the APE metrics are scored for the
+    whole grid at once (per step, one configs x items array); other strategies and
+    metrics point by point, over `workers` processes. Either way the numbers are those
+    `evaluate` gives for the same seed. `progress` receives episodes done per projection.
+    """
     configs = source_grid() if configs is None else configs
     cls = strategy_class(strategy)
     if cls is NearestStrategy or not getattr(cls, "uses_params", True):
         configs = configs[:1]
+    kind = _vector_kind(strategy, metric)
     scores: dict[str, np.ndarray] = {}
     for dim in dims:
-        table = np.zeros((len(episodes), len(configs)))
-        if _vectorisable(strategy, metric):
-            for e, episode in enumerate(episodes):
-                if len(episode) >= 2:
-                    probs = grid_probabilities(episode, configs, dim, form,
-                                               ignore_params=cls is NearestStrategy)
-                    if metric == "expected-ape":
-                        table[e] = (1.0 - probs).sum(axis=0)
-                    else:
-                        uniforms = ape_uniforms(episode_rng(seed, e), repeats, len(probs))
-                        table[e] = np.median(sampled_errors(probs, uniforms), axis=0)
-                if progress:
-                    progress(1)
+        if kind is not None:
+            scores[dim] = _vector_scores(episodes, configs, dim, form, kind, metric, repeats,
+                                         seed, protocol, progress)
         else:
-            for g, row in enumerate(configs):
-                make = strategy_factory(strategy, dict(zip(PARAM_NAMES, row, strict=True)),
-                                        dim, form)
-                for e, episode in enumerate(episodes):
-                    try:
-                        table[e, g] = score_episode(make, episode, metric, repeats,
-                                                    episode_rng(seed, e))
-                    except StrategyError:  # e.g. too many items for `optimal`
-                        table[e, g] = np.nan
-                if progress:
-                    progress(len(episodes) / len(configs))
-        scores[dim] = table
+            scores[dim] = _pointwise_scores(episodes, strategy, configs, dim, form, metric,
+                                            repeats, seed, protocol, workers, progress)
     return FitResult(strategy, metric, list(dims), configs, scores)
 
 

@@ -19,7 +19,9 @@ class Candidate:
 
     `k` and `c` override what `category` and `contained` would give; `then_at` is where
     the agent will stand after delivering this item (e.g. its target), which strategies
-    that look ahead need (if None they assume the agent stays at the item).
+    that look ahead need (if None they assume the agent stays at the item); `fetch_at` is
+    where the agent stands when it takes the item (the 2-step model chooses its second
+    item from there; if None, the item's own position).
     """
 
     name: str
@@ -29,10 +31,14 @@ class Candidate:
     k: float | None = None
     c: float | None = None
     then_at: Position | None = None
+    fetch_at: Position | None = None
     metadata: Mapping[str, Any] = field(default_factory=dict, compare=False, hash=False)
 
     def after_position(self) -> Position:
         return self.then_at if self.then_at is not None else self.position
+
+    def fetch_position(self) -> Position:
+        return self.fetch_at if self.fetch_at is not None else self.position
 
 
 @dataclass(frozen=True)

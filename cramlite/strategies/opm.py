@@ -3,7 +3,7 @@
 `opm`: next = argmin over remaining items of C(agent, item) (Eq. 3.1 by default),
 ties broken uniformly at random. `nearest`: the same with k = c = 1 (plain distance).
 `opm-2step`: choose the best item and commit to the best item after it, seen from where
-the agent will stand after the first (its `then_at`, e.g. its target on the table).
+the first one is taken (its `fetch_at`, by default its position).
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import numpy as np
 
 from cramlite.strategies.base import Strategy
 from cramlite.strategies.candidates import Candidate
+from cramlite.strategies.history import TakenHistory
 
 #: Above this many candidates the numpy path is faster than plain Python.
 VECTOR_THRESHOLD = 48
@@ -64,41 +65,41 @@ class NearestStrategy(OPMStrategy):
         return 1.0, 1.0
 
 
-class OPMTwoStepStrategy(OPMStrategy):
+class OPMTwoStepStrategy(TakenHistory, OPMStrategy):
+    """The 2-step model (3.3.3.1): decisions come in pairs. The first of a pair is the
+    OPM's choice from where the agent stands; the second is chosen "directly when
+    performing the first action": the lowest-cost remaining item as seen from where the
+    first was taken (its `fetch_at`, by default the item's position), and it is taken
+    next whatever is cheapest from where the agent then stands.
+
+    When a caller reports with `observe` that another item was taken (teacher-forced
+    scoring of human sequences), the second choice is made from where that one was taken.
+    """
+
     name = "opm-2step"
-    summary = "2-step OPM: best item now, and commit to the best one after it (3.3.3.1)"
+    summary = "2-step OPM: best item now, and the best one as seen from it next (3.3.3.1)"
     memoryless = False
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self._committed: Candidate | None = None
+        self.reset_history()
 
     def reset(self, candidates: Sequence[Candidate] = (),
               agent: Sequence[float] | None = None) -> None:
         super().reset(candidates, agent)
-        self._committed = None
+        self.reset_history()
 
-    def choose(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> Candidate:
-        committed = self._take_commitment(remaining)
-        if committed is not None:
-            return committed
-        first = self.greedy(remaining, agent)
-        rest = [c for c in remaining if c is not first]
-        if rest:
-            self._committed = self.greedy(rest, first.after_position())
-        return first
+    def decision_point(self, agent: Sequence[float]) -> Sequence[float]:
+        """Where this step's costs are measured from: the agent for the first of a pair,
+        where the pair's first item was taken for the second."""
+        if len(self.taken) % 2 == 1:
+            return self.taken[-1].fetch_position()
+        return agent
 
     def tied(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> list[Candidate]:
-        return [self.choose(remaining, agent)]
+        return OPMStrategy.tied(self, remaining, self.decision_point(agent))
 
-    def _take_commitment(self, remaining: Sequence[Candidate]) -> Candidate | None:
-        """The committed item if it is still there (matched by name, then nearest position:
-        positions read back from a simulation may differ in the last digits)."""
-        target, self._committed = self._committed, None
-        if target is None:
-            return None
-        same = [c for c in remaining if c.name == target.name]
-        if not same:
-            return None
-        return min(same, key=lambda c: sum((a - b) ** 2 for a, b in
-                                           zip(c.position, target.position, strict=True)))
+    def choose(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> Candidate:
+        chosen = self._pick(self.tied(remaining, agent))
+        self.record_choice(chosen)
+        return chosen

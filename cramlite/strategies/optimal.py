@@ -4,9 +4,14 @@ Total cost of an order = C(agent, first) + sum over later items of
 C(where the agent stands after the previous item, item), with C the OPM's weighted cost
 and "where it stands after" the previous item's `then_at` (its target, when the agent
 delivers each item before fetching the next) or, without one, the item's position.
-Exact dynamic programming over subsets (Held-Karp), O(2^n n^2), vectorised per subset.
-If the remaining items ever differ from the plan (a human took another item), it
-re-plans from the current position.
+Exact dynamic programming over subsets (Held-Karp), O(2^n n^2), vectorised per subset
+size. It re-plans at every decision from where the agent stands and takes, uniformly
+among ties, an item that begins a least-cost order: by Bellman's principle that is the
+order planned up front while the agent is where the plan expects it, it copes when it is
+not (a human took another item), and each decision depends only on what is left, so
+exact expected APE and the vectorised fit apply. When every item's `then_at` is the
+same point T (every trip starts at the table), the order after the first does not
+matter, and the first item minimises C(agent, j) - C(T, j).
 """
 
 from __future__ import annotations
@@ -20,77 +25,74 @@ from cramlite.strategies.candidates import Candidate
 from cramlite.strategies.opm import OPMStrategy
 
 MAX_OPTIMAL_ITEMS = 15
+#: Totals within this relative distance of the least are ties (sums of the same costs in
+#: another order differ in the last bits).
+TIE_RTOL = 1e-12
+
+
+def completion_costs(step: np.ndarray) -> np.ndarray:
+    """rest[mask, i]: least cost of fetching every item in `mask` (a bit set over n items),
+    starting from where the agent stands after item i (i not in mask); `step[i, j]` is the
+    cost of fetching j after i. Held-Karp backwards, one layer of subset sizes at a time."""
+    n = step.shape[0]
+    full = 1 << n
+    rest = np.full((full, n), np.inf)
+    rest[0] = 0.0
+    sizes = np.array([bin(m).count("1") for m in range(full)])
+    bits = 1 << np.arange(n)
+    for size in range(1, n + 1):
+        masks = np.flatnonzero(sizes == size)
+        member = (masks[:, None] & bits[None, :]) != 0  # (M, n): l in mask
+        # total[m, i, l] = step[i, l] + rest[mask - l, l]
+        without = rest[masks[:, None] ^ bits[None, :], np.arange(n)[None, :]]  # (M, n)
+        total = step[None, :, :] + without[:, None, :]
+        total = np.where(member[:, None, :], total, np.inf)
+        rest[masks] = total.min(axis=2)
+    return rest
 
 
 class OptimalStrategy(OPMStrategy):
     name = "optimal"
     summary = f"least total weighted cost order, exact DP (up to {MAX_OPTIMAL_ITEMS} items)"
-    memoryless = False
 
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
-        self._plan: list[Candidate] = []
-
-    def reset(self, candidates: Sequence[Candidate] = (),
-              agent: Sequence[float] | None = None) -> None:
-        super().reset(candidates, agent)
-        self._plan = []
-
-    def choose(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> Candidate:
-        if sorted(c.name for c in self._plan) != sorted(c.name for c in remaining):
-            self._plan = self.plan(remaining, agent)
-        nxt = self._plan.pop(0)
-        same = [c for c in remaining if c.name == nxt.name]
-        return min(same, key=lambda c: sum((a - b) ** 2 for a, b in
-                                           zip(c.position, nxt.position, strict=True)))
-
-    def tied(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> list[Candidate]:
-        return [self.choose(remaining, agent)]
-
-    def plan(self, items: Sequence[Candidate], agent: Sequence[float]) -> list[Candidate]:
-        """The full order of least total cost from `agent` over `items`."""
-        n = len(items)
+    def first_costs(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> np.ndarray:
+        """For each item, the least total cost of an order that starts with it, up to a
+        constant shared by all items (what decides the first item)."""
+        n = len(remaining)
+        self._ensure_weights(remaining, agent)
+        kc = np.array([self.kc(c) for c in remaining], dtype=float).reshape(-1, 2)
+        positions = np.array([c.position for c in remaining], dtype=float).reshape(-1, 3)
+        start = self.model.costs(agent, positions, kc[:, 0], kc[:, 1])
+        afters = {c.after_position() for c in remaining}
+        if len(afters) == 1:  # every trip starts from one point (e.g. the table)
+            return start - self.model.costs(afters.pop(), positions, kc[:, 0], kc[:, 1])
         if n > MAX_OPTIMAL_ITEMS:
             raise StrategyError(f"optimal plans exactly for at most {MAX_OPTIMAL_ITEMS} items, "
                                 f"got {n}; use opm or opm-2step for larger tasks")
-        if n == 1:
-            return list(items)
-        self._ensure_weights(items, agent)
-        kc = np.array([self.kc(c) for c in items], dtype=float)
-        positions = np.array([c.position for c in items], dtype=float)
-        start = self.model.costs(agent, positions, kc[:, 0], kc[:, 1])
         step = np.vstack([self.model.costs(c.after_position(), positions, kc[:, 0], kc[:, 1])
-                          for c in items])  # step[i, j]: after i, fetch j
-        np.fill_diagonal(step, np.inf)
-        full = 1 << n
-        dp = np.full((full, n), np.inf)
-        parent = np.full((full, n), -1, dtype=np.int64)
-        bits = 1 << np.arange(n)
-        dp[bits, np.arange(n)] = start
-        for mask in range(1, full):
-            row = dp[mask]
-            if not np.isfinite(row).any():
-                continue
-            nxt = np.flatnonzero((mask & bits) == 0)
-            if nxt.size == 0:
-                continue
-            total = row[:, None] + step[:, nxt]
-            best_last = total.argmin(axis=0)
-            value = total[best_last, np.arange(nxt.size)]
-            new_masks = mask | bits[nxt]
-            better = value < dp[new_masks, nxt]
-            dp[new_masks[better], nxt[better]] = value[better]
-            parent[new_masks[better], nxt[better]] = best_last[better]
-        final = dp[full - 1]
-        ends = np.flatnonzero(final == final.min())
-        if len(ends) > 1:
-            self.random_picks += 1
-        last = int(ends[0] if len(ends) == 1 else ends[self.rng.integers(len(ends))])
-        order, mask = [], full - 1
-        while last >= 0:
-            order.append(last)
-            last, mask = int(parent[mask, last]), mask & ~(1 << last)
-        return [items[i] for i in reversed(order)]
+                          for c in remaining])  # step[i, j]: after i, fetch j
+        rest = completion_costs(step)
+        full = (1 << n) - 1
+        return start + np.array([rest[full ^ (1 << j), j] for j in range(n)])
+
+    def tied(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> list[Candidate]:
+        values = self.first_costs(remaining, agent)
+        best = values.min()
+        close = values <= best + TIE_RTOL * max(abs(best), 1.0)
+        return [c for c, near in zip(remaining, close, strict=True) if near]
+
+    def choose(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> Candidate:
+        return self._pick(self.tied(remaining, agent))
+
+    def plan(self, items: Sequence[Candidate], agent: Sequence[float]) -> list[Candidate]:
+        """A full order of least total cost from `agent` over `items`."""
+        remaining, order, here = list(items), [], tuple(agent)
+        while remaining:
+            chosen = self.choose(remaining, here)
+            order.append(chosen)
+            remaining.remove(chosen)
+            here = chosen.after_position()
+        return order
 
     def total_cost(self, order: Sequence[Candidate], agent: Sequence[float]) -> float:
         """Total weighted cost of a given order (for checking plans)."""

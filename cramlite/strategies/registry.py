@@ -13,6 +13,7 @@ import importlib
 from importlib.metadata import entry_points
 from typing import Any
 
+from cramlite.errors import UserInputError
 from cramlite.strategies.base import Strategy, StrategyError
 from cramlite.strategies.opm import NearestStrategy, OPMStrategy, OPMTwoStepStrategy
 from cramlite.strategies.optimal import OptimalStrategy
@@ -28,9 +29,13 @@ def plugin_entry_points() -> dict[str, Any]:
     return {ep.name: ep for ep in entry_points(group=ENTRY_POINT_GROUP)}
 
 
+LEARNED_PREFIX = "learned:"
+
+
 def available_strategies() -> dict[str, str]:
     """Name -> one-line summary of every strategy that can be named (built-in or plugin)."""
     out = {name: cls.summary for name, cls in BUILTIN.items()}
+    out[f"{LEARNED_PREFIX}MODEL"] = "a model file written by `cramlite train` (RNN, NN, CPT)"
     for name, ep in plugin_entry_points().items():
         out.setdefault(name, f"plugin {ep.value}")
     return out
@@ -40,6 +45,13 @@ def strategy_class(name: str) -> type[Strategy]:
     """Resolve a strategy name, an entry-point name, or `package.module:Class`."""
     if name in BUILTIN:
         return BUILTIN[name]
+    if name.startswith(LEARNED_PREFIX):  # a trained model; numpy (and cpt) only when used
+        from cramlite.learning.strategy import learned_class
+
+        try:
+            return learned_class(name[len(LEARNED_PREFIX):])
+        except UserInputError as exc:
+            raise StrategyError(str(exc)) from None
     plugins = plugin_entry_points()
     try:
         if name in plugins:

@@ -22,7 +22,7 @@ from cramlite.resources import worlds_dir
 CATEGORIES = ("strong", "mid", "food", "none")
 SETUP_FORMAT = 1
 
-ITEM_KEYS = {"name", "type", "pose", "surface", "contained", "category", "target"}
+ITEM_KEYS = {"name", "type", "pose", "surface", "contained", "category", "target", "aliases"}
 TOP_KEYS = {"format", "name", "description", "world", "robot", "items", "baseline_order"}
 
 
@@ -54,6 +54,8 @@ class ItemSpec:
     target: Pose
     contained: bool = False
     category: str = "none"
+    #: Other names of the item (a learned strategy maps `breakfast-cereal` to `cereal`).
+    aliases: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -202,8 +204,12 @@ def _parse_item(raw: Any, i: int, path: Path, fail) -> ItemSpec:
     if category not in CATEGORIES:
         raise fail(f"{where}.category", f"unknown category {category!r}; expected one of "
                                         f"{', '.join(CATEGORIES)}")
+    aliases = raw.get("aliases") or []
+    if not isinstance(aliases, list) or not all(isinstance(a, str) and a for a in aliases):
+        raise fail(f"{where}.aliases", f"expected a list of names, got {aliases!r}")
     return ItemSpec(name=name, type=item_type, urdf=urdf, pose=pose, surface=surface,
-                    target=target, contained=contained, category=category)
+                    target=target, contained=contained, category=category,
+                    aliases=tuple(aliases))
 
 
 def _numbers(value: Any, n: int, fld: str, shape: str, fail) -> tuple[float, ...]:
