@@ -34,6 +34,7 @@ from cramlite.designators.grasps import (
     relative_pose,
     tool_pose,
 )
+from cramlite.designators.motions import gripper_joints
 from cramlite.designators.objects import ObjectDesignator
 from cramlite.motion.collision import HeldObject
 from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names, tool_frame
@@ -183,6 +184,8 @@ class CostmapLocation:
             with ctx.collisions.preserved([self.obj, *held(ctx)]):
                 free = all(checks.free(solved[key], holding)
                            for key, (_, holding) in poses.items())
+                if free and self.purpose == PLACE:  # and the gripper opens there
+                    free = checks.free(solved["joints"], False)
             if free:
                 break
             if last:
@@ -263,13 +266,15 @@ def carry_joints(ctx: RobotContext, arm: str, grasp: str, grasp_height: float,
 
 class ConfigurationChecks:
     """Checks single configurations of one arm (and the torso) at a base pose, holding the
-    object or not; the object being manipulated may be touched when not held."""
+    object (gripper closed) or not (gripper open); the object being manipulated may be
+    touched when not held."""
 
     def __init__(self, ctx: RobotContext, base: BasePose, arm: str, obj: str,
                  relative: Relative | None):
         self.ctx = ctx
         self.base = base
         self.names = [TORSO_JOINT, *arm_joint_names(arm)]
+        self.arm = arm
         self.held = [HeldObject(obj, tool_frame(arm), relative)] if relative else []
         self.obj = obj
         self._scenes: dict[bool, object] = {}
@@ -283,6 +288,9 @@ class ConfigurationChecks:
                 self.names, (self.held if holding else []) + others,
                 ignore=() if holding else (self.obj,))
         ctx.world.robot.set_base_pose(*self.base)
+        # the gripper is closed on the object while it is held, open before and after
+        ctx.world.robot.set_joint_positions(gripper_joints(self.arm,
+                                                           "close" if holding else "open"))
         return self._scenes[holding]
 
     def _vector(self, joints: dict[str, float]) -> np.ndarray:
