@@ -50,6 +50,8 @@ TRAVEL_WEIGHT = 0.25
 PICK, PLACE = "pick", "place"
 #: Grasp solutions tried per base pose when the approach or departure has none near it.
 IK_ATTEMPTS = 3
+#: Random restarts of a grasp's IK: a base pose that needs more is left for the next one.
+GRASP_IK_RESTARTS = 4
 Relative = tuple[Vec3, Quat]
 
 
@@ -107,24 +109,31 @@ class CostmapLocation:
         self.max_ik_checks = max_ik_checks
         self.rejected: dict[str, int] = dict.fromkeys(REJECTIONS, 0)
 
-    def candidates(self, ctx: RobotContext) -> list[tuple[float, BasePose, str, str]]:
+    def candidates(self, ctx: RobotContext) -> Iterator[tuple[float, BasePose, str, str]]:
+        """(score, base pose, arm, grasp), best (lowest) score first."""
         here = ctx.modules.base_pose()
         px, py, _ = self.point
-        out = []
+        steps = round(360 / self.angle_step_deg)
+        yaw = np.radians(np.arange(steps) * self.angle_step_deg) - math.pi
+        standoff = np.array(STANDOFFS_M)[:, None]
+        ux, uy = np.cos(yaw)[None, :], np.sin(yaw)[None, :]
+        scores, poses, labels = [], [], []
         for arm in self.arms:
             side = 1.0 if arm == "right" else -1.0
-            for standoff in STANDOFFS_M:
-                for step in range(round(360 / self.angle_step_deg)):
-                    yaw = math.radians(step * self.angle_step_deg) - math.pi
-                    ux, uy = math.cos(yaw), math.sin(yaw)
-                    x = px - standoff * ux - side * SHOULDER_OFFSET_M * uy
-                    y = py - standoff * uy + side * SHOULDER_OFFSET_M * ux
-                    score = (abs(standoff - IDEAL_STANDOFF_M)
-                             + TRAVEL_WEIGHT * math.dist((x, y), here[:2]))
-                    for rank, grasp in enumerate(self.grasps):
-                        out.append((score + 0.05 * rank, (x, y, yaw), arm, grasp))
-        out.sort(key=lambda c: c[0])
-        return out
+            x = px - standoff * ux - side * SHOULDER_OFFSET_M * uy
+            y = py - standoff * uy + side * SHOULDER_OFFSET_M * ux
+            score = (np.abs(standoff - IDEAL_STANDOFF_M)
+                     + TRAVEL_WEIGHT * np.hypot(x - here[0], y - here[1]))
+            pose = np.stack([x, y, np.broadcast_to(yaw, x.shape)], axis=-1).reshape(-1, 3)
+            for rank, grasp in enumerate(self.grasps):
+                scores.append(score.ravel() + 0.05 * rank)
+                poses.append(pose)
+                labels += [(arm, grasp)] * len(pose)
+        score_all = np.concatenate(scores)
+        pose_all = np.concatenate(poses)
+        for i in np.argsort(score_all, kind="stable"):
+            x, y, yaw_i = pose_all[i]
+            yield float(score_all[i]), (float(x), float(y), float(yaw_i)), *labels[i]
 
     def ground(self, ctx: RobotContext) -> Iterator[ReachablePose]:
         """Checked candidates, best first (lazily: work is done as they are asked for).
@@ -223,9 +232,11 @@ class CostmapLocation:
         local = {key: in_base_frame(pose, base) for key, (pose, _) in poses.items()}
         for attempt in range(IK_ATTEMPTS):
             start = seed if attempt == 0 else None
-            at = (ik.solve(local["joints"], ctx.rng, start, fixed_torso_m=torso)
+            at = (ik.solve(local["joints"], ctx.rng, start, fixed_torso_m=torso,
+                           restarts=GRASP_IK_RESTARTS)
                   if torso is not None
-                  else ik.solve(local["joints"], ctx.rng, start, preferred_torso_m=TORSO_UP_M))
+                  else ik.solve(local["joints"], ctx.rng, start, preferred_torso_m=TORSO_UP_M,
+                                restarts=GRASP_IK_RESTARTS))
             if at is None:
                 return None  # out of reach: other starts will not help
             solved = {"joints": at.joints}
