@@ -49,6 +49,7 @@ from cramlite.designators.tasks import recorded
 from cramlite.motion.ik import ARMS
 from cramlite.motion.trajectory import wrap_angle
 from cramlite.world.bodies import quat_yaw
+from cramlite.world.bullet import p
 from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT
 
 BasePose = tuple[float, float, float]
@@ -243,20 +244,50 @@ class TransportAction:
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
+        from cramlite.designators.storage import (
+            CloseAction,
+            OpenAction,
+            container_at,
+            container_of,
+            is_open,
+        )
+
         obj = as_object(self.object, ctx)
         ParkArmsAction().perform(ctx)
+        source = container_of(ctx, obj.name)
+        if source is not None and not is_open(ctx, source):
+            OpenAction(source.name).perform(ctx)  # stored: open its drawer or cupboard first
+        # a target inside a container is where it is when the container is closed; it
+        # rides along with a drawer as that opens
+        destination, local = (container_at(ctx, self.target) if self.target is not None
+                              else (None, None))
+        target = self.target
+        if destination is not None and is_open(ctx, destination):
+            target = _at(ctx, destination, local)
         origin, _ = obj.pose(ctx)
-        picked_from, planned = self._fetch(ctx, obj)
+        picked_from, planned = self._fetch(ctx, obj, target, plan_delivery=destination is None
+                                           or is_open(ctx, destination))
+        if source is not None and not ctx.options.keep_containers_open \
+                and source.name in ctx.opened:
+            CloseAction(source.name).perform(ctx)  # the item is out: close it again
         try:
-            self._deliver(ctx, obj, planned)
+            if destination is not None and not is_open(ctx, destination):
+                OpenAction(destination.name).perform(ctx)
+                target = _at(ctx, destination, local)
+            self._deliver(ctx, obj, planned, target)
         except PlanFailure:
             self._put_back(ctx, obj, origin, picked_from)
             raise
+        if destination is not None and not ctx.options.keep_containers_open \
+                and destination.name in ctx.opened:
+            CloseAction(destination.name).perform(ctx)  # the item is in: close it
 
-    def _fetch(self, ctx: RobotContext, obj: ObjectDesignator,
-               ) -> tuple[ReachablePose, tuple[Vec3, ReachablePose]]:
+    def _fetch(self, ctx: RobotContext, obj: ObjectDesignator, target: Vec3 | None,
+               plan_delivery: bool = True,
+               ) -> tuple[ReachablePose, tuple[Vec3, ReachablePose] | None]:
         """Navigate and pick up, trying base poses best first; an arm and grasp that could
-        not put the object down at the goal are not used."""
+        not put the object down at the goal are not used (unless the goal cannot be
+        planned yet, `plan_delivery` False: it is inside a closed container)."""
         (x, y, z), orientation = obj.pose(ctx)
         height = obj.height_m(ctx)
         tried: list[str] = []
@@ -272,8 +303,11 @@ class TransportAction:
             # put down from base yaw psi, the object will stand at psi + yaw_offset
             yaw_offset = quat_yaw(orientation) - reach.base[2]
             combo = (reach.arm, reach.grasp, 0 if round_object else round(yaw_offset * 18))
+            if not plan_delivery:
+                deliverable[combo] = ((0.0, 0.0, 0.0), reach)  # placeholder: found later
             if combo not in deliverable:
-                deliverable[combo] = self._plan_delivery(ctx, obj, reach, height, yaw_offset)
+                deliverable[combo] = self._plan_delivery(ctx, obj, reach, height, yaw_offset,
+                                                         target)
                 if deliverable[combo] is None:
                     tried.append(f"{reach.arm} arm {reach.grasp} grasp: could not put it down "
                                  "at the goal")
@@ -287,7 +321,7 @@ class TransportAction:
                 NavigateAction(reach.base).perform(ctx)
                 PickUpAction(obj, reach=reach).perform(ctx)
                 ctx.note(f"picked {obj.name} from {reach.describe()}")
-                return reach, planned
+                return reach, planned if plan_delivery else None
             except PlanFailure as failure:
                 tried.append(f"{reach.describe()}: {failure.kind}: {failure.reason}")
                 last = failure
@@ -303,11 +337,12 @@ class TransportAction:
         raise cls(reason, obj=obj.name, tried=tried)
 
     def _plan_delivery(self, ctx: RobotContext, obj: ObjectDesignator, pick: ReachablePose,
-                       height: float, yaw_offset: float) -> tuple[Vec3, ReachablePose] | None:
+                       height: float, yaw_offset: float, target: Vec3 | None,
+                       ) -> tuple[Vec3, ReachablePose] | None:
         """A spot of the goal (among its first few free ones) and a checked base pose from
         which the arm of `pick` puts the object down there, held as `pick` would hold it,
         clear of its neighbours."""
-        placing = PlacingLocation(obj, target=self.target, surface=self.surface,
+        placing = PlacingLocation(obj, target=target, surface=self.surface,
                                   preferred=self.preferred)
         for index, spot in enumerate(placing.ground(ctx)):
             location = CostmapLocation(spot, {pick.grasp: grasp_height_m(pick.grasp, height)},
@@ -321,13 +356,15 @@ class TransportAction:
         return None
 
     def _deliver(self, ctx: RobotContext, obj: ObjectDesignator,
-                 planned: tuple[Vec3, ReachablePose] | None = None) -> None:
-        """Navigate and place: first where the fetch step found it can, then other spots
-        and base poses, best first."""
+                 planned: tuple[Vec3, ReachablePose] | None = None,
+                 target: Vec3 | None = None) -> None:
+        """Navigate and place (at `target`, the goal where it is now): first where the
+        fetch step found it can, then other spots and base poses, best first."""
         arm = next(a for a, h in ctx.holding.items() if h.obj == obj.name)
         tried: list[str] = []
         last: PlanFailure | None = None
-        for attempt, (spot, reach) in enumerate(self._place_candidates(ctx, obj, arm, planned)):
+        candidates = self._place_candidates(ctx, obj, arm, planned, target)
+        for attempt, (spot, reach) in enumerate(candidates):
             if attempt >= ctx.options.max_candidates:
                 break
             where = f"spot ({spot[0]:.2f}, {spot[1]:.2f})"
@@ -350,14 +387,14 @@ class TransportAction:
         raise PlacementFailed(reason, obj=obj.name, tried=tried)
 
     def _place_candidates(self, ctx: RobotContext, obj: ObjectDesignator, arm: str,
-                          planned: tuple[Vec3, ReachablePose] | None,
+                          planned: tuple[Vec3, ReachablePose] | None, target: Vec3 | None,
                           ) -> Iterator[tuple[Vec3, ReachablePose | None]]:
         """(spot, base pose) to try, best first: the plan from the fetch step, then each
         free spot with its base poses (None: the spot has no reachable one)."""
         if planned is not None:
             yield planned
         holding = ctx.holding[arm]
-        placing = PlacingLocation(obj, target=self.target, surface=self.surface,
+        placing = PlacingLocation(obj, target=target, surface=self.surface,
                                   preferred=self.preferred)
         for spot in placing.ground(ctx):
             location = CostmapLocation(spot, {holding.grasp: holding.grasp_height_m},
@@ -391,50 +428,84 @@ class TransportAction:
         update_carried(ctx)
 
 
-def footprint_outline(corners_xy: np.ndarray, spacing: float) -> np.ndarray:
-    """Points every `spacing` along the convex hull of 2D points (a carried object's
-    footprint as seen from above)."""
-    pts = sorted(map(tuple, np.round(corners_xy, 6)))
-    if len(pts) < 3:
-        return np.asarray(pts)
+def _at(ctx: RobotContext, container, local: Vec3) -> Vec3:
+    """A point given in a container's inside frame, in the world as it stands now."""
+    return tuple(p.multiplyTransforms(*ctx.world.link_frame(container.inside_link), local,
+                                      (0, 0, 0, 1))[0])
 
-    def half(points):
-        out: list[tuple[float, float]] = []
-        for pt in points:
-            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (pt[1] - out[-2][1])
-                                     - (out[-1][1] - out[-2][1]) * (pt[0] - out[-2][0])) <= 0:
-                out.pop()
-            out.append(pt)
-        return out
 
-    hull = half(pts)[:-1] + half(pts[::-1])[:-1]  # Andrew's monotone chain
+def footprint_outline(points_xy: np.ndarray, spacing: float) -> np.ndarray:
+    """Points every `spacing` along the convex hull of 2D points (a carried object's or a
+    link's footprint as seen from above)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    pts = np.unique(np.round(np.asarray(points_xy, dtype=float), 6), axis=0)
+    try:
+        hull = pts[ConvexHull(pts).vertices]
+    except (QhullError, ValueError):  # fewer than 3 points, or all on a line
+        return pts
     samples = []
-    for a, b in zip(hull, hull[1:] + hull[:1], strict=True):
-        n = max(1, math.ceil(math.dist(a, b) / spacing))
-        t = np.arange(n)[:, None] / n
-        samples.append(np.asarray(a) + t * (np.asarray(b) - np.asarray(a)))
+    for a, b in zip(hull, np.roll(hull, -1, axis=0), strict=True):
+        n = max(1, math.ceil(float(np.hypot(*(b - a))) / spacing))
+        samples.append(a + (np.arange(n)[:, None] / n) * (b - a))
     return np.vstack(samples)
 
 
 def update_carried(ctx: RobotContext) -> None:
-    """Tell the base planner the real footprint of every carried object (its box seen
-    from above, in the robot's frame) and the furniture it could touch (whatever rises
-    above its lowest point)."""
+    """Tell the base planner what sticks out of the base while it drives: every carried
+    object (its box seen from above) and every link of the robot that reaches beyond the
+    base square (an arm holding something, say; from its collision mesh), each as an
+    outline in the robot's frame checked against the furniture that rises above the
+    lowest point that sticks out."""
     x, y, yaw = ctx.modules.base_pose()
     c, s = math.cos(yaw), math.sin(yaw)
-    points, lowest = [], math.inf
+    groups: dict[float, list[np.ndarray]] = {}
     for holding in ctx.holding.values():
         obj = ctx.world.objects[holding.obj]
         ex, ey, ez = obj.extents
         local = np.array([[sx * ex / 2, sy * ey / 2, sz * ez] for sx in (-1, 1)
                           for sy in (-1, 1) for sz in (0, 1)])
         rotation = _se3(ctx.modules.object_pose(holding.obj))
-        world = local @ rotation.rotation.T + rotation.translation
-        lowest = min(lowest, float(world[:, 2].min()))
-        dx, dy = world[:, 0] - x, world[:, 1] - y
-        robot_xy = np.column_stack([c * dx + s * dy, -s * dx + c * dy])
-        points.append(footprint_outline(robot_xy, FOOTPRINT_SPACING_M))
-    if not points:
-        ctx.checker.set_carried([])
-        return
-    ctx.checker.set_carried(np.vstack(points), carried_map(ctx.world, lowest))
+        corners = local @ rotation.rotation.T + rotation.translation
+        dx, dy = corners[:, 0] - x, corners[:, 1] - y
+        robot_frame = np.column_stack([c * dx + s * dy, -s * dx + c * dy, corners[:, 2]])
+        _stick_out(robot_frame, ctx.checker.half_size_m, groups)
+    for bucket, points in _upper_body_outline(ctx).items():
+        groups.setdefault(bucket, []).append(points)
+    ctx.checker.set_carried([(np.vstack(points), carried_map(ctx.world, bucket))
+                             for bucket, points in sorted(groups.items())])
+
+
+def _stick_out(points: np.ndarray, square: float, groups: dict[float, list[np.ndarray]],
+               ) -> None:
+    """Add the outline of what of `points` (robot frame, x y z) lies beyond the base
+    square, under the height of its lowest such point (rounded down to 5 cm)."""
+    out = np.any(np.abs(points[:, :2]) > square, axis=1)
+    if not out.any():
+        return  # within the base's square: the base's check covers it
+    bucket = math.floor(float(points[out, 2].min()) * 20) / 20  # 5 cm: few maps
+    outline = footprint_outline(points[:, :2], FOOTPRINT_SPACING_M)
+    outline = outline[np.any(np.abs(outline) > square, axis=1)]
+    groups.setdefault(bucket, []).append(np.vstack([outline, points[out, :2]]))
+
+
+def _upper_body_outline(ctx: RobotContext) -> dict[float, np.ndarray]:
+    """What of the robot's links sticks out of its base in its current configuration
+    (robot frame, by height); each arm's part computed once per configuration of that arm
+    (and the torso) and world."""
+    robot = ctx.world.robot
+    joints = robot.joint_positions()
+    parts = ctx.collisions.upper_body_parts()
+    out: dict[float, list[np.ndarray]] = {}
+    for part, (names, links) in parts.items():
+        key = ("outline", part, tuple(round(joints[n], 2) for n in names))
+        if key not in ctx.world.cache:
+            groups: dict[float, list[np.ndarray]] = {}
+            with ctx.collisions.preserved():
+                robot.set_base_pose(0.0, 0.0, 0.0)
+                for points in ctx.collisions.upper_body_points(links):
+                    _stick_out(points, ctx.checker.half_size_m, groups)
+            ctx.world.cache[key] = {b: np.vstack(p) for b, p in groups.items()}
+        for bucket, points in ctx.world.cache[key].items():
+            out.setdefault(bucket, []).append(points)
+    return {b: np.vstack(p) for b, p in out.items()}

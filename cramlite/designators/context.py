@@ -57,6 +57,12 @@ class ExecutionOptions:
     turn_speed_rad_s: float = 1.0
     #: Scale of the URDF's joint velocity limits for arm, torso and gripper motions.
     joint_speed_scale: float = 1.0
+    #: How fast the gripper pulls or pushes a handle (drawers and doors move gently).
+    handle_speed_m_s: float = 0.1
+    handle_accel_m_s2: float = 0.2
+    #: Leave containers opened to fetch or store an item open until the plan ends (the
+    #: plan closes them then); by default each is closed as soon as the item is out (in).
+    keep_containers_open: bool = False
 
 
 @dataclass
@@ -86,21 +92,24 @@ def robot_limits(world: World, speed_scale: float = 1.0) -> JointLimits:
         prismatic=frozenset(robot.prismatic))
 
 
-def _maps(world: World) -> OccupancyMap:
-    key = ("occupancy", 0.0)
+def _joint_state(world: World) -> tuple[float, ...]:
+    """The drawers' and doors' positions, rounded: what the 2D maps depend on."""
+    return tuple(round(v, 3) for v in world.world_joint_positions().values())
+
+
+def occupancy_map(world: World, min_top_m: float = 0.0) -> OccupancyMap:
+    """The world's 2D map as its drawers and doors stand now (only links whose top is
+    above `min_top_m` count), cached per world."""
+    key = ("occupancy", min_top_m, _joint_state(world))
     if key not in world.cache:
-        world.cache[key] = OccupancyMap(world.environment_boxes())
+        world.cache[key] = OccupancyMap(world.environment_boxes(), min_top_m=min_top_m)
     return world.cache[key]
 
 
 def carried_map(world: World, lowest_z: float) -> OccupancyMap:
     """The fixed world that a carried object whose bottom is at `lowest_z` can touch
-    (links whose top is above it), cached per world by the centimetre."""
-    bucket = math.floor(lowest_z * 100) / 100
-    key = ("occupancy", bucket)
-    if key not in world.cache:
-        world.cache[key] = OccupancyMap(world.environment_boxes(), min_top_m=bucket)
-    return world.cache[key]
+    (links whose top is above it), by the centimetre."""
+    return occupancy_map(world, math.floor(lowest_z * 100) / 100)
 
 
 def collision_checker(world: World) -> CollisionChecker:
@@ -128,7 +137,7 @@ class RobotContext:
     trace: TraceWriter | None = None
 
     def __post_init__(self) -> None:
-        self.checker = FootprintChecker(_maps(self.world))
+        self.checker = FootprintChecker(occupancy_map(self.world))
         self.base_planner = BaseMotionPlanner(self.checker, self.planner_options)
         self.collisions = collision_checker(self.world)
         self.limits = robot_limits(self.world, self.options.joint_speed_scale)
@@ -136,6 +145,8 @@ class RobotContext:
         self.tasks = TaskTree(lambda: self.time_s)
         #: Last IK solution per (arm, grasp): the seed of the next solve.
         self.ik_seeds: dict[tuple[str, str], dict[str, float]] = {}
+        #: Containers this context opened and has not closed yet.
+        self.opened: list[str] = []
         #: Arm motions that needed OMPL (the straight path collided) and all arm motions.
         self.planned_motions = 0
         self.arm_motions = 0
@@ -166,6 +177,12 @@ class RobotContext:
         t0 = self.time_s
         self.modules.execute_joint_trajectory(trajectory, self._observer(t0, trajectory.times))
         self.arm_s += trajectory.duration_s
+        if trajectory.world:  # a drawer or door moved: the base planner's map changes
+            self.refresh_maps()
+
+    def refresh_maps(self) -> None:
+        """Point the base planner at the map of the world as it stands now."""
+        self.checker.occupancy = occupancy_map(self.world)
 
     def _observer(self, t0: float, times: np.ndarray):
         if self.trace is None:
@@ -181,14 +198,16 @@ class RobotContext:
         for name in self.world.objects:
             pos, orn = self.modules.object_pose(name)
             objects[name] = [*pos, *orn]
+        world_joints = self.modules.world_joint_positions()
         self.trace.write_state(self.time_s if t is None else t, self.modules.base_pose(),
-                               [joints[n] for n in self.trace_joints], [],
+                               [joints[n] for n in self.trace_joints],
+                               [world_joints[n] for n in self.world.world_joints],
                                {h.obj: arm for arm, h in self.holding.items()}, objects,
                                self.tasks.current_action())
 
     def trace_header(self, setup: str, plan: str, strategy: str, seed: int) -> dict[str, Any]:
         return {"setup": setup, "plan": plan, "strategy": strategy, "seed": seed,
-                "joints": self.trace_joints, "world_joints": []}
+                "joints": self.trace_joints, "world_joints": list(self.world.world_joints)}
 
     def open_trace(self, path: str | Path, setup: str, plan: str, strategy: str,
                    seed: int) -> TraceWriter:

@@ -1,4 +1,4 @@
-"""The failure taxonomy of plans: one root, `PlanFailure`, and six kinds.
+"""The failure taxonomy of plans: one root, `PlanFailure`, and seven kinds.
 
 Each failure carries the object it concerns, the reason, and what was tried before it
 escaped (base poses, arms, grasps, placements), so a user can see why a plan gave up.
@@ -62,3 +62,10 @@ class MotionPlanningFailed(PlanFailure):
     """No collision-free arm (or torso, gripper) path to a configuration."""
 
     kind = "motion planning failed"
+
+
+class ContainerManipulationFailed(PlanFailure):
+    """A drawer or door could not be opened or closed (no base pose and arm can follow
+    its handle, or the motion failed)."""
+
+    kind = "container manipulation failed"

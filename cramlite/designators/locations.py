@@ -228,10 +228,10 @@ class CostmapLocation:
         table-setting height), then the approach and departure from it on the same torso;
         if those fail from one grasp solution, from another one (a few tries)."""
         ik = arm_ik(arm)
-        seed = ctx.ik_seeds.get((arm, grasp, self.purpose))
+        seed = ctx.ik_seeds.get((arm, grasp, self.purpose)) or reaching_seed(arm)
         local = {key: in_base_frame(pose, base) for key, (pose, _) in poses.items()}
         for attempt in range(IK_ATTEMPTS):
-            start = seed if attempt == 0 else None
+            start = seed if attempt == 0 else reaching_seed(arm) if attempt == 1 else None
             at = (ik.solve(local["joints"], ctx.rng, start, fixed_torso_m=torso,
                            restarts=GRASP_IK_RESTARTS)
                   if torso is not None
@@ -260,19 +260,62 @@ class CostmapLocation:
                 f"({'/'.join(self.arms)} arm, {'/'.join(self.grasps)} grasp): {parts}")
 
 
+#: An arm reaching forward, elbow down (the right arm; the left one mirrored): the IK's
+#: first start, so that solutions keep the elbow in, clear of a cupboard's door or sides.
+REACHING = {"shoulder_pan_joint": 0.0, "shoulder_lift_joint": 0.4, "upper_arm_roll_joint": 0.0,
+            "elbow_flex_joint": -1.2, "forearm_roll_joint": 0.0, "wrist_flex_joint": -0.6,
+            "wrist_roll_joint": 0.0}
+
+
+def reaching_seed(arm: str) -> dict[str, float]:
+    side = 1.0 if arm == "right" else -1.0
+    mirrored = {"shoulder_pan_joint", "upper_arm_roll_joint", "forearm_roll_joint",
+                "wrist_roll_joint"}
+    return {f"{arm[0]}_{j}": (v * side if j in mirrored else v) for j, v in REACHING.items()}
+
+
 def carry_joints(ctx: RobotContext, arm: str, grasp: str, grasp_height: float,
                  torso_m: float) -> dict[str, float] | None:
     """The arm's joints (torso kept) that carry an object grasped with `grasp` upright in
-    front of the robot (see `carry_pose`); None if the arm cannot. Solved once per world
-    (a fixed seed: the same every time)."""
+    front of the robot (see `carry_pose`); None if the arm cannot. Of the solutions from
+    several starts, the one whose links stick out of the base least low down (so that the
+    robot can drive up to a table carrying it); solved once per world, from fixed starts."""
     key = ("carry", arm, grasp, round(grasp_height, 3), round(torso_m, 3))
     cache = ctx.world.cache
     if key not in cache:
-        seed = {**PARK_JOINTS[arm], TORSO_JOINT: torso_m}
-        solution = arm_ik(arm).solve(carry_pose(grasp, grasp_height, arm),
-                                     np.random.default_rng(0), seed, fixed_torso_m=torso_m)
-        cache[key] = None if solution is None else solution.joints
+        ik = arm_ik(arm)
+        rng = np.random.default_rng(0)
+        seeds = [{**PARK_JOINTS[arm], TORSO_JOINT: torso_m}, reaching_seed(arm)]
+        seeds += [ik.from_q(ik.random_q(rng)) for _ in range(CARRY_STARTS - len(seeds))]
+        best, best_low = None, -np.inf
+        for seed in seeds:
+            solution = ik.solve(carry_pose(grasp, grasp_height, arm), rng, seed,
+                                fixed_torso_m=torso_m, restarts=0)
+            if solution is None:
+                continue
+            low = _lowest_outside(ctx, solution.joints)
+            if low > best_low:
+                best, best_low = solution.joints, low
+        cache[key] = best
     return cache[key]
+
+
+#: IK starts tried for a carry pose.
+CARRY_STARTS = 8
+
+
+def _lowest_outside(ctx: RobotContext, joints: dict[str, float]) -> float:
+    """How high the lowest point of the robot that sticks out of its base square is (the
+    robot at the origin), with `joints` (restored afterwards)."""
+    robot = ctx.world.robot
+    square = ctx.checker.half_size_m
+    with ctx.collisions.preserved():
+        robot.set_base_pose(0.0, 0.0, 0.0)
+        robot.set_joint_positions(joints)
+        lows = [float(pts[np.any(np.abs(pts[:, :2]) > square, axis=1), 2].min())
+                for pts in ctx.collisions.upper_body_points()
+                if np.any(np.abs(pts[:, :2]) > square)]
+    return min(lows, default=np.inf)
 
 
 class ConfigurationChecks:

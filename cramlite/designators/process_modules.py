@@ -56,6 +56,10 @@ class ProcessModules(ABC):
     def base_pose(self) -> BasePose: ...
 
     @abstractmethod
+    def world_joint_positions(self) -> dict[str, float]:
+        """Where the drawers and doors are (perception on a real robot)."""
+
+    @abstractmethod
     def joint_positions(self, names: Sequence[str]) -> dict[str, float]: ...
 
     @abstractmethod
@@ -91,9 +95,12 @@ class SimulatedProcessModules(ProcessModules):
     def execute_joint_trajectory(self, trajectory: JointTrajectory,
                                  on_state: StateObserver = None) -> None:
         indices = [self.robot.joint_index[n] for n in trajectory.names]
+        held = set(self._attached)
         for i, state in enumerate(trajectory.positions):
             p.resetJointStatesMultiDof(self.robot.body, indices, [[float(v)] for v in state],
                                        physicsClientId=self.client)
+            for joint, values in trajectory.world.items():  # the handle pulls the drawer
+                self.world.set_world_joint(joint, float(values[i]), exclude=held)
             self._carry()
             if on_state is not None:
                 on_state(i)
@@ -117,6 +124,7 @@ class SimulatedProcessModules(ProcessModules):
     def settle(self, seconds: float, objects: Sequence[str] = ()) -> None:
         """Step physics until `objects` are at rest (or `seconds` have passed)."""
         joints = self.robot.joint_positions()
+        drawers = self.world.world_joint_positions()
         bodies = [self.world.objects[n].body for n in objects]
         steps = max(1, round(seconds / TIME_STEP_S))
         done, resting = 0, 0
@@ -130,6 +138,9 @@ class SimulatedProcessModules(ProcessModules):
             if resting >= 2:  # at rest over two checks, not at the top of a bounce
                 break
         self.robot.set_joint_positions(joints)  # undo any sag of the unactuated joints
+        for name, value in drawers.items():  # and any give of the drawers and doors
+            p.resetJointState(self.world.environment, self.world.world_joints[name], value,
+                              physicsClientId=self.client)
         self._carry()
 
     def base_pose(self) -> BasePose:
@@ -137,6 +148,9 @@ class SimulatedProcessModules(ProcessModules):
 
     def joint_positions(self, names: Sequence[str]) -> dict[str, float]:
         return self.robot.joint_positions(list(names))
+
+    def world_joint_positions(self) -> dict[str, float]:
+        return self.world.world_joint_positions()
 
     def object_pose(self, obj: str) -> tuple[Vec3, Quat]:
         return self.world.objects[obj].pose()

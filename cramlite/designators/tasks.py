@@ -93,7 +93,8 @@ def recorded(perform: Callable) -> Callable:
 
     @functools.wraps(perform)
     def wrapper(self, ctx, *args, **kwargs):
-        obj = object_name(getattr(self, "object", None) or getattr(self, "obj", None))
+        obj = object_name(getattr(self, "object", None) or getattr(self, "obj", None)
+                          or getattr(self, "container", None))
         with ctx.tasks.node(type(self).__name__, obj):
             return perform(self, ctx, *args, **kwargs)
 

@@ -23,6 +23,7 @@ import numpy as np
 
 from cramlite.world.bodies import Quat, Vec3
 from cramlite.world.bullet import p
+from cramlite.world.quiet import c_stdout_silenced
 
 #: Penetration allowed for the convex-hull approximation of the robot's meshes.
 PENETRATION_TOLERANCE_M = 0.01
@@ -90,6 +91,51 @@ class CollisionChecker:
                 out[link] = (centre, float(np.linalg.norm(local - centre, axis=1).max()))
         return out
 
+    def upper_body_parts(self) -> dict[str, tuple[list[str], list[int]]]:
+        """The robot's links above its base with a collision mesh, in three parts (each
+        arm, and the rest: torso, head), with the joints that place each part."""
+        if not hasattr(self, "_upper_parts"):
+            robot, client = self.robot, self.client
+            torso = robot.joint_index["torso_lift_joint"]
+            arms = {arm: set(self.moving_links([f"{arm[0]}_shoulder_pan_joint"]))
+                    for arm in ("right", "left")}
+            parts: dict[str, tuple[list[str], list[int]]] = {
+                "right": (["torso_lift_joint"] + [n for n in robot.joint_index
+                                                  if n.startswith("r_")], []),
+                "left": (["torso_lift_joint"] + [n for n in robot.joint_index
+                                                 if n.startswith("l_")], []),
+                "body": (["torso_lift_joint"], [])}
+            self._upper_vertices = {}
+            for link in self.moving_links(["torso_lift_joint"]):
+                if link == torso:
+                    continue
+                with c_stdout_silenced():  # PyBullet prints "?" for links without a mesh
+                    vertices = p.getMeshData(robot.body, link, physicsClientId=client)[1]
+                if not vertices:
+                    continue
+                self._upper_vertices[link] = np.array(vertices)
+                part = next((a for a, links in arms.items() if link in links), "body")
+                parts[part][1].append(link)
+            self._upper_parts = parts
+        return self._upper_parts
+
+    def upper_body_points(self, links: Sequence[int] | None = None) -> list[np.ndarray]:
+        """The collision-mesh vertices (world) of robot links above its base (default: all
+        of them: arms, torso, head), as the robot stands now."""
+        robot, client = self.robot, self.client
+        parts = self.upper_body_parts()
+        links = list(links) if links is not None else [
+            link for _, part in parts.values() for link in part]
+        if not links:
+            return []
+        states = p.getLinkStates(robot.body, links, computeForwardKinematics=True,
+                                 physicsClientId=client)
+        out = []
+        for link, state in zip(links, states, strict=True):
+            rotation = np.array(p.getMatrixFromQuaternion(state[1])).reshape(3, 3)
+            out.append(self._upper_vertices[link] @ rotation.T + np.asarray(state[0]))
+        return out
+
     # -- what moves ------------------------------------------------------------------------
     def moving_links(self, joints: Sequence[str]) -> list[int]:
         """Links with collision shapes that move when any of `joints` moves."""
@@ -108,7 +154,8 @@ class CollisionChecker:
 
     def scene(self, joints: Sequence[str], held: Sequence[HeldObject] = (),
               ignore: Sequence[str] = ()) -> CollisionScene:
-        """A scene for motions of `joints` carrying `held`, allowed to touch `ignore`."""
+        """A scene for motions of `joints` carrying `held`, allowed to touch `ignore` (items
+        or environment links, e.g. a handle in the gripper)."""
         return CollisionScene(self, list(joints), list(held), set(ignore))
 
     # -- robot state, saved and restored ---------------------------------------------------
@@ -184,11 +231,11 @@ class CollisionScene:
         # obstacles: every environment link with a shape, every item not held or ignored
         obstacles: list[tuple[int, int, str]] = []
         boxes = []
-        for name, index in world.environment_links.items():
-            if not p.getCollisionShapeData(world.environment, index, physicsClientId=self.client):
+        for name, index, lo, hi in world.environment_link_boxes():
+            if name in ignore:
                 continue
             obstacles.append((world.environment, index, name))
-            boxes.append(world.link_bounds(index))
+            boxes.append((lo, hi))
         for name, obj in world.objects.items():
             if name in held_names or name in ignore:
                 continue

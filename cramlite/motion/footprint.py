@@ -9,6 +9,7 @@ rises above their lowest point.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -60,8 +61,12 @@ class OccupancyMap:
             disk = xx**2 + yy**2 <= radius**2
             grid = ndimage.binary_dilation(grid, structure=disk)
         self.blocked = grid
-        #: Distance (m) from each cell to the nearest obstacle cell (before inflation).
-        self.clearance = ndimage.distance_transform_edt(~self.obstacles) * resolution_m
+
+    @functools.cached_property
+    def clearance(self) -> np.ndarray:
+        """Distance (m) from each cell to the nearest obstacle cell (before inflation);
+        computed when first asked for (maps for carried objects never need it)."""
+        return ndimage.distance_transform_edt(~self.obstacles) * self.resolution
 
     def clearance_at(self, x: float, y: float) -> float:
         i, j = self._cell(x, y)
@@ -93,48 +98,49 @@ def square_outline(half_size: float, spacing: float) -> np.ndarray:
 
 
 class FootprintChecker:
-    """Is the robot (square base + carried points) clear of the fixed world at (x, y, yaw)?
-
-    Carried objects are checked against `carried_occupancy` (obstacles tall enough to
-    reach them) when given, else against the full map.
+    """Is the robot (square base, and whatever sticks out of it: carried objects, arm
+    links) clear of the fixed world at (x, y, yaw)? What sticks out is checked against
+    the furniture tall enough to reach it (`set_carried`).
     """
 
     def __init__(self, occupancy: OccupancyMap, half_size_m: float = PR2_BASE_HALF_SIZE_M,
-                 outline_spacing_m: float = 0.04,
-                 carried_occupancy: OccupancyMap | None = None):
+                 outline_spacing_m: float = 0.04):
         self.occupancy = occupancy
-        self.carried_occupancy = carried_occupancy or occupancy
         self.outline = square_outline(half_size_m, outline_spacing_m)
-        self.carried = np.zeros((0, 2))
+        self.half_size_m = half_size_m
+        self.carried_groups: list[tuple[np.ndarray, OccupancyMap, float]] = []
         self.checks = 0
         pad = occupancy.margin + occupancy.resolution
         self._sure_free = half_size_m * math.sqrt(2) + pad  # circumscribed circle clear
         self._sure_blocked = half_size_m - pad  # something inside the inscribed circle
-        self._reach = self._sure_free
 
-    def set_carried(self, points: Sequence[Sequence[float]],
-                    occupancy: OccupancyMap | None = None) -> None:
-        """Robot-frame xy points outlining carried objects (empty when the hands are free),
-        and the map of what they can touch at the height they are carried."""
-        self.carried = np.asarray(points, dtype=float).reshape(-1, 2)
-        if occupancy is not None:
-            self.carried_occupancy = occupancy
-        extent = float(np.hypot(*self.carried.T).max()) if len(self.carried) else 0.0
-        self._reach = max(self._sure_free, extent + self.occupancy.margin +
-                          self.occupancy.resolution)
+    def set_carried(self, groups: Sequence[tuple[Sequence[Sequence[float]],
+                                                  OccupancyMap | None]]) -> None:
+        """What sticks out of the base while driving: groups of robot-frame xy points
+        outlining a carried object or an arm's link, each with the map of what it can touch
+        at its height (None: the full map). Empty when nothing sticks out."""
+        pad = self.occupancy.margin + self.occupancy.resolution
+        self.carried_groups = []
+        for points, occupancy in groups:
+            pts = np.asarray(points, dtype=float).reshape(-1, 2)
+            if len(pts):  # (points, map, how far they reach from the base's centre)
+                self.carried_groups.append((pts, occupancy or self.occupancy,
+                                            float(np.hypot(*pts.T).max()) + pad))
 
     def is_free(self, x: float, y: float, yaw: float) -> bool:
         self.checks += 1
         clearance = self.occupancy.clearance_at(x, y)
-        if clearance > self._reach:
-            return True  # nothing within reach of any footprint point, at any yaw
         if clearance < self._sure_blocked:
             return False
         c, s = math.cos(yaw), math.sin(yaw)
         rotation = np.array([[c, s], [-s, c]])
-        if self.occupancy.blocked_at(self.outline @ rotation + (x, y)).any():
+        # each part is checked only if something it can touch is within its reach
+        if clearance <= self._sure_free and \
+                self.occupancy.blocked_at(self.outline @ rotation + (x, y)).any():
             return False
-        if len(self.carried):
-            return not bool(self.carried_occupancy.blocked_at(self.carried @ rotation + (x, y))
-                            .any())
+        for points, occupancy, reach in self.carried_groups:
+            if clearance > reach:  # (the full map's clearance: no less than its own)
+                continue
+            if occupancy.blocked_at(points @ rotation + (x, y)).any():
+                return False
         return True

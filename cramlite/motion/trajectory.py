@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -68,11 +68,14 @@ class JointLimits:
 
 @dataclass(frozen=True)
 class JointTrajectory:
-    """Joint positions (states x joints) and the robot time of each state (from 0)."""
+    """Joint positions (states x joints) and the robot time of each state (from 0);
+    `world`: values of world joints (a drawer, a door) that move along with the robot's,
+    one per state (the robot pulls the handle; a simulation moves the joint with it)."""
 
     names: tuple[str, ...]
     positions: np.ndarray
     times: np.ndarray
+    world: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def duration_s(self) -> float:
@@ -191,3 +194,41 @@ def time_base_path(waypoints: Sequence[Sequence[float]], speed_m_s: float,
     turn = np.abs((step[:, 2] + math.pi) % (2 * math.pi) - math.pi)
     dt = np.maximum(np.hypot(step[:, 0], step[:, 1]) / speed_m_s, turn / turn_rad_s)
     return BaseTrajectory(arr, np.concatenate([[0.0], np.cumsum(dt)]))
+
+
+def time_along_path(names: Sequence[str], states: np.ndarray, arc_m: np.ndarray,
+                    limits: JointLimits, speed_m_s: float, accel_m_s2: float,
+                    world: dict[str, np.ndarray] | None = None) -> JointTrajectory:
+    """Time a dense path that follows a curve (the arm pulling a handle): one trapezoidal
+    profile along the curve's length `arc_m` (per state, from 0), at most `speed_m_s` and
+    `accel_m_s2`, slowed down where a joint would exceed its velocity limit. The states
+    are close together (a few centimetres of the curve), so the turns between them are
+    small and the robot does not stop at each."""
+    names = tuple(names)
+    states = np.asarray(states, dtype=float)
+    arc = np.asarray(arc_m, dtype=float)
+    velocity = np.array([limits.velocity[n] for n in names])
+    length = float(arc[-1]) if len(arc) else 0.0
+    if length <= 0:
+        return JointTrajectory(names, states, np.zeros(len(states)), world or {})
+    ds = np.diff(arc)
+    dq = np.abs(np.diff(states, axis=0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # path speed that keeps every joint within its limit on each segment
+        allowed = np.where(dq > 0, ds[:, None] * velocity / dq, np.inf).min(axis=1)
+    speed = float(min(speed_m_s, np.min(allowed[ds > 0]) if np.any(ds > 0) else speed_m_s))
+    ramp = min(speed / accel_m_s2, math.sqrt(length / accel_m_s2))  # time to top speed
+    top = accel_m_s2 * ramp
+    ramp_len = 0.5 * accel_m_s2 * ramp ** 2
+    cruise = (length - 2 * ramp_len) / top if top > 0 else 0.0
+
+    def time_at(s: float) -> float:
+        if s <= ramp_len:
+            return math.sqrt(2 * s / accel_m_s2)
+        if s <= length - ramp_len:
+            return ramp + (s - ramp_len) / top
+        rest = max(0.0, length - s)
+        return 2 * ramp + cruise - math.sqrt(2 * rest / accel_m_s2)
+
+    times = np.maximum.accumulate(np.array([time_at(float(s)) for s in arc]))
+    return JointTrajectory(names, states, times, world or {})

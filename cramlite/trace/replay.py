@@ -40,17 +40,22 @@ def world_for(trace: Trace, gui: bool = False) -> World:
         raise TraceError(f"header field setup: {exc}", field="line 1") from None
     world = World.from_setup(setup, gui=gui)
     missing = [n for n in trace.header["joints"] if n not in world.robot.joint_index]
+    missing += [n for n in trace.header["world_joints"] if n not in world.world_joints]
     if missing:
         world.close()
-        raise TraceError(f"header field joints: the PR2 has no joint {missing[0]!r}",
-                         field="line 1")
+        raise TraceError(f"header fields joints/world_joints: no joint {missing[0]!r} in the "
+                         "robot or the world", field="line 1")
     return world
 
 
-def apply_state(world: World, joints: Sequence[str], state: dict[str, Any]) -> None:
-    """Put the robot and the objects where the state says."""
+def apply_state(world: World, joints: Sequence[str], state: dict[str, Any],
+                world_joints: Sequence[str] = ()) -> None:
+    """Put the robot, the drawers and doors, and the objects where the state says."""
     world.robot.set_base_pose(*state["base"])
     world.robot.set_joint_positions(dict(zip(joints, state["q"], strict=True)))
+    everything = set(world.objects)
+    for name, value in zip(world_joints, state["w"], strict=True):
+        world.set_world_joint(name, value, exclude=everything)
     for name, pose in state["objects"].items():
         if name in world.objects:
             world.objects[name].set_pose(tuple(pose[:3]), tuple(pose[3:]))
@@ -106,7 +111,7 @@ def render_gif(trace: Trace, out: str | Path, fps: float = 10.0, speed: float = 
     joints = trace.header["joints"]
     with world_for(trace) as world:
         for k, state in enumerate(states_at_frames(trace, fps, speed)):
-            apply_state(world, joints, state)
+            apply_state(world, joints, state, trace.header["world_joints"])
             image = Image.fromarray(render_frame(world, width, height))
             caption(image, k * speed / fps, state)
             frames.append(image.quantize(colors=128, method=Image.Quantize.MEDIANCUT))
@@ -130,7 +135,7 @@ def replay_gui(trace: Trace, speed: float = 1.0) -> None:
             delay = state["t"] / speed - (time.perf_counter() - start)
             if delay > 0:
                 time.sleep(delay)
-            apply_state(world, joints, state)
+            apply_state(world, joints, state, trace.header["world_joints"])
 
 
 @dataclass(frozen=True)
@@ -153,6 +158,7 @@ def _interpolate(a: dict[str, Any], b: dict[str, Any], s: float) -> dict[str, An
             a["base"][1] + s * (b["base"][1] - a["base"][1]),
             a["base"][2] + s * math.remainder(b["base"][2] - a["base"][2], 2 * math.pi)]
     q = [x + s * (y - x) for x, y in zip(a["q"], b["q"], strict=True)]
+    w = [x + s * (y - x) for x, y in zip(a["w"], b["w"], strict=True)]
     objects = {}
     for name, pa in a["objects"].items():
         pb = b["objects"].get(name, pa)
@@ -162,7 +168,7 @@ def _interpolate(a: dict[str, Any], b: dict[str, Any], s: float) -> dict[str, An
             qb = -qb
         quat = qa + s * (qb - qa)
         objects[name] = [*position, *(quat / np.linalg.norm(quat))]
-    return {**a, "base": base, "q": q, "objects": objects}
+    return {**a, "base": base, "q": q, "w": w, "objects": objects}
 
 
 def penetrations(trace: Trace, tolerance_m: float = 0.01, substeps: int = 2,
@@ -181,6 +187,7 @@ def penetrations(trace: Trace, tolerance_m: float = 0.01, substeps: int = 2,
 
 def _scan(trace: Trace, world: World, tolerance_m: float, substeps: int) -> list[Penetration]:
     joints = trace.header["joints"]
+    world_joints = trace.header["world_joints"]
     client, robot, env = world.client, world.robot.body, world.environment
     bodies = {name: obj.body for name, obj in world.objects.items()}
     env_names = {index: name for name, index in world.environment_links.items()}
@@ -202,13 +209,17 @@ def _scan(trace: Trace, world: World, tolerance_m: float, substeps: int) -> list
                 out[key] = max(out.get(key, 0.0), -pt[8])
         return out
 
+    handles = {name: world.environment_links[c.handle] for name, c in world.containers.items()}
+
     def check(state: dict[str, Any], line: int) -> None:
-        apply_state(world, joints, state)
+        apply_state(world, joints, state, world_joints)
         held = set(state["held"])
         action = state.get("action") or {}
         manipulated = action.get("object")
+        grasped = handles.get(manipulated)  # opening a container: its handle is in hand
         for (la, lb), depth in deepest(robot, env).items():
-            note(link_names[la], env_names.get(lb, "the kitchen"), depth, state, line)
+            if lb != grasped:
+                note(link_names[la], env_names.get(lb, "the kitchen"), depth, state, line)
         for name, body in bodies.items():
             if name in held:
                 for (_, lb), depth in deepest(body, env).items():
@@ -227,10 +238,10 @@ def _scan(trace: Trace, world: World, tolerance_m: float, substeps: int) -> list
         check(state, line)
         if i + 1 < len(states):
             nxt = states[i + 1]
-            held_pose = _held_relative(world, joints, state)
+            held_pose = _held_relative(world, joints, world_joints, state)
             for k in range(1, substeps):
                 mid = _interpolate(state, nxt, k / substeps)
-                _carry_held(world, joints, mid, held_pose)
+                _carry_held(world, joints, world_joints, mid, held_pose)
                 check(mid, line)
     return sorted(worst.values(), key=lambda f: -f.depth_m)
 
@@ -239,9 +250,10 @@ def _tool_link(arm: str) -> str:
     return f"{arm[0]}_gripper_tool_frame"
 
 
-def _held_relative(world: World, joints: Sequence[str], state: dict[str, Any]) -> dict:
+def _held_relative(world: World, joints: Sequence[str], world_joints: Sequence[str],
+                   state: dict[str, Any]) -> dict:
     """Held objects' poses in their gripper's frame at a recorded state."""
-    apply_state(world, joints, state)
+    apply_state(world, joints, state, world_joints)
     out = {}
     for name, arm in state["held"].items():
         tool = world.robot.link_pose(_tool_link(arm))
@@ -250,10 +262,10 @@ def _held_relative(world: World, joints: Sequence[str], state: dict[str, Any]) -
     return out
 
 
-def _carry_held(world: World, joints: Sequence[str], state: dict[str, Any],
-                held: dict) -> None:
+def _carry_held(world: World, joints: Sequence[str], world_joints: Sequence[str],
+                state: dict[str, Any], held: dict) -> None:
     """Held objects of an interpolated state follow the interpolated gripper."""
-    apply_state(world, joints, state)
+    apply_state(world, joints, state, world_joints)
     for name, (arm, relative) in held.items():
         tool = world.robot.link_pose(_tool_link(arm))
         pos, orn = p.multiplyTransforms(*tool, *relative)

@@ -22,7 +22,8 @@ from cramlite.resources import worlds_dir
 CATEGORIES = ("strong", "mid", "food", "none")
 SETUP_FORMAT = 1
 
-ITEM_KEYS = {"name", "type", "pose", "surface", "contained", "category", "target", "aliases"}
+ITEM_KEYS = {"name", "type", "pose", "surface", "in", "contained", "category", "target",
+             "aliases"}
 TOP_KEYS = {"format", "name", "description", "world", "robot", "items", "baseline_order"}
 
 
@@ -50,12 +51,14 @@ class ItemSpec:
     type: str
     urdf: Path
     pose: Pose
-    surface: str
+    surface: str  #: the link it stands on (for an item in a container: the container's)
     target: Pose
     contained: bool = False
     category: str = "none"
     #: Other names of the item (a learned strategy maps `breakfast-cereal` to `cereal`).
     aliases: tuple[str, ...] = ()
+    #: The closed container (drawer, cupboard) it is stored in, if any (`in:` in the file).
+    container: str | None = None
 
 
 @dataclass(frozen=True)
@@ -176,9 +179,13 @@ def _parse_item(raw: Any, i: int, path: Path, fail) -> ItemSpec:
     if unknown:
         raise fail(f"{where}.{sorted(unknown)[0]}", f"unknown key; expected one of "
                                                     f"{sorted(ITEM_KEYS)}")
-    for key in ("name", "pose", "surface", "target"):
+    for key in ("name", "pose", "target"):
         if key not in raw:
-            raise fail(f"{where}.{key}", "missing; every item needs name, pose, surface, target")
+            raise fail(f"{where}.{key}", "missing; every item needs name, pose, target and "
+                                         "surface (or in: a container)")
+    if ("surface" in raw) == ("in" in raw):
+        raise fail(f"{where}.surface", "expected either 'surface: <link it stands on>' or "
+                                       "'in: <container>', not both or neither")
     name = raw["name"]
     if not isinstance(name, str) or not name:
         raise fail(f"{where}.name", f"expected a non-empty string, got {name!r}")
@@ -192,12 +199,19 @@ def _parse_item(raw: Any, i: int, path: Path, fail) -> ItemSpec:
                                     "or a path to a URDF")
     pose = Pose(*_numbers(raw["pose"], 4, f"{where}.pose", "[x, y, z, yaw]", fail))
     target = Pose(*_numbers(raw["target"], 4, f"{where}.target", "[x, y, z, yaw]", fail))
-    surface = raw["surface"]
+    container = raw.get("in")
+    if container is not None and (not isinstance(container, str) or not container):
+        raise fail(f"{where}.in", f"expected the name of a container, got {container!r}")
+    surface = raw.get("surface", container)
     if not isinstance(surface, str) or not surface:
         raise fail(f"{where}.surface", f"expected the name of a world link, got {surface!r}")
-    contained = raw.get("contained", False)
+    contained = raw.get("contained", container is not None)
     if not isinstance(contained, bool):
         raise fail(f"{where}.contained", f"expected true or false, got {contained!r}")
+    if contained != (container is not None):
+        raise fail(f"{where}.contained", "follows from 'in:' (items in a container are "
+                                         f"contained, the others not); expected "
+                                         f"{str(container is not None).lower()} or no key")
     category = raw.get("category", "none")
     if category is None:
         category = "none"
@@ -209,7 +223,7 @@ def _parse_item(raw: Any, i: int, path: Path, fail) -> ItemSpec:
         raise fail(f"{where}.aliases", f"expected a list of names, got {aliases!r}")
     return ItemSpec(name=name, type=item_type, urdf=urdf, pose=pose, surface=surface,
                     target=target, contained=contained, category=category,
-                    aliases=tuple(aliases))
+                    aliases=tuple(aliases), container=container)
 
 
 def _numbers(value: Any, n: int, fld: str, shape: str, fail) -> tuple[float, ...]:

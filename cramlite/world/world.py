@@ -6,15 +6,19 @@ nothing is kept at module level, so any number of worlds can live in one process
 
 from __future__ import annotations
 
+import contextlib
+import math
 import os
 import sys
-from dataclasses import dataclass
+from collections.abc import Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from cramlite.errors import SetupError
 from cramlite.world.bodies import RobotBody, Vec3, WorldObject, yaw_quat
 from cramlite.world.bullet import p
+from cramlite.world.containers import Container, containers_path, load_containers
 from cramlite.world.pr2 import pr2_urdf_path
 from cramlite.world.quiet import c_stdout_silenced
 from cramlite.world.setup import Setup
@@ -50,6 +54,7 @@ class Snapshot:
     base: tuple[float, float, float]
     joints: dict[str, float]
     objects: dict[str, tuple[Vec3, tuple[float, float, float, float]]]
+    world_joints: dict[str, float] = field(default_factory=dict)
 
 
 class World:
@@ -68,6 +73,9 @@ class World:
         p.setTimeStep(TIME_STEP_S, physicsClientId=self.client)
         self.environment: int | None = None
         self.environment_links: dict[str, int] = {}
+        #: The environment's movable joints (drawers, doors), by name.
+        self.world_joints: dict[str, int] = {}
+        self.containers: dict[str, Container] = {}
         self.robot: RobotBody | None = None
         self.objects: dict[str, WorldObject] = {}
         self.setup: Setup | None = None
@@ -122,9 +130,93 @@ class World:
         self.environment = self._load_urdf(urdf, fixed=True)
         base = p.getBodyInfo(self.environment, physicsClientId=self.client)[0].decode()
         self.environment_links = {base: -1}
+        self.world_joints = {}
         for j in range(p.getNumJoints(self.environment, physicsClientId=self.client)):
             info = p.getJointInfo(self.environment, j, physicsClientId=self.client)
             self.environment_links[info[12].decode()] = j
+            if info[2] != p.JOINT_FIXED:
+                self.world_joints[info[1].decode()] = j
+                self._hold_world_joint(j, 0.0)
+        self.containers = load_containers(urdf)
+        for container in self.containers.values():
+            for link in (container.link, container.handle, container.inside_link):
+                if link not in self.environment_links:
+                    raise SetupError(f"container {container.name!r}: the world has no link "
+                                     f"{link!r}", source=str(containers_path(urdf)))
+            if container.joint not in self.world_joints:
+                raise SetupError(f"container {container.name!r}: the world has no movable "
+                                 f"joint {container.joint!r}", source=str(containers_path(urdf)))
+
+    # -- the world's own joints (drawers, doors) ------------------------------------------
+    def _hold_world_joint(self, index: int, value: float) -> None:
+        """Physics steps keep the joint where it was put (the robot moves it kinematically)."""
+        p.setJointMotorControl2(self.environment, index, p.POSITION_CONTROL,
+                                targetPosition=value, force=1e4, physicsClientId=self.client)
+
+    def world_joint_positions(self) -> dict[str, float]:
+        return {name: p.getJointState(self.environment, index, physicsClientId=self.client)[0]
+                for name, index in self.world_joints.items()}
+
+    def link_frame(self, link: str) -> tuple[Vec3, tuple[float, float, float, float]]:
+        """Pose of an environment link's frame in the world."""
+        index = self.environment_links[link]
+        if index == -1:
+            pos, orn = p.getBasePositionAndOrientation(self.environment,
+                                                       physicsClientId=self.client)
+        else:
+            state = p.getLinkState(self.environment, index, computeForwardKinematics=True,
+                                   physicsClientId=self.client)
+            pos, orn = state[4], state[5]
+        return tuple(pos), tuple(orn)
+
+    @contextlib.contextmanager
+    def joint_at(self, joint: str, value: float) -> Iterator[None]:
+        """Put one world joint at a value for a look (nothing else moves), then back."""
+        index = self.world_joints[joint]
+        before = p.getJointState(self.environment, index, physicsClientId=self.client)[0]
+        p.resetJointState(self.environment, index, value, physicsClientId=self.client)
+        try:
+            yield
+        finally:
+            p.resetJointState(self.environment, index, before, physicsClientId=self.client)
+
+    def container_of_joint(self, joint: str) -> Container | None:
+        return next((c for c in self.containers.values() if c.joint == joint), None)
+
+    def items_inside(self, container: Container, exclude: set[str] | None = None) -> list[str]:
+        """Items standing inside a container now (by where they are)."""
+        frame = p.invertTransform(*self.link_frame(container.inside_link))
+        out = []
+        for name, obj in self.objects.items():
+            if exclude and name in exclude:
+                continue
+            local, _ = p.multiplyTransforms(*frame, *obj.pose())
+            (x0, y0, z0), (x1, y1, z1) = container.inside_min, container.inside_max
+            if x0 <= local[0] <= x1 and y0 <= local[1] <= y1 and z0 - 0.02 <= local[2] <= z1:
+                out.append(name)
+        return out
+
+    def set_world_joint(self, name: str, value: float, exclude: set[str] | None = None) -> None:
+        """Move a drawer or door; items inside a drawer move with it (but `exclude`)."""
+        index = self.world_joints[name]
+        container = self.container_of_joint(name)
+        carried = []
+        if container is not None and container.inside_link == container.link:
+            frame = self.link_frame(container.link)
+            inverse = p.invertTransform(*frame)
+            for item in self.items_inside(container, exclude):
+                carried.append((item, p.multiplyTransforms(*inverse,
+                                                           *self.objects[item].pose())))
+        p.resetJointState(self.environment, index, value, physicsClientId=self.client)
+        self._hold_world_joint(index, value)
+        if carried:
+            frame = self.link_frame(container.link)
+            for item, relative in carried:
+                self.objects[item].set_pose(*p.multiplyTransforms(*frame, *relative))
+
+    def set_world_joints(self, values: dict[str, float]) -> None:
+        for name, value in values.items():
+            self.set_world_joint(name, value)
 
     def load_robot(self) -> RobotBody:
         body = self._load_urdf(pr2_urdf_path(), fixed=True)
@@ -158,22 +250,43 @@ class World:
             else:
                 state = p.getLinkState(self.environment, index, physicsClientId=self.client)
                 pos, orn = state[4], state[5]
-            centre, _ = p.multiplyTransforms(pos, orn, shapes[0][5], shapes[0][6])
+            centre, rotation = p.multiplyTransforms(pos, orn, shapes[0][5], shapes[0][6])
+            matrix = p.getMatrixFromQuaternion(rotation)  # a turned box (a door): its span
             half = [d / 2 for d in shapes[0][3]]
-            return (tuple(c - h for c, h in zip(centre, half, strict=True)),
-                    tuple(c + h for c, h in zip(centre, half, strict=True)))
+            span = [sum(abs(matrix[3 * r + c]) * half[c] for c in range(3)) for r in range(3)]
+            return (tuple(c - h for c, h in zip(centre, span, strict=True)),
+                    tuple(c + h for c, h in zip(centre, span, strict=True)))
         lo, hi = p.getAABB(self.environment, index, physicsClientId=self.client)
         return tuple(lo), tuple(hi)
 
     def environment_boxes(self) -> list[tuple[str, Vec3, Vec3]]:
         """Axis-aligned bounds of every environment link (for 2D maps of fixed geometry)."""
-        out = []
-        for name, index in self.environment_links.items():
-            if not p.getCollisionShapeData(self.environment, index, physicsClientId=self.client):
-                continue
-            lo, hi = self.link_bounds(index)
-            out.append((name, lo, hi))
-        return out
+        return [(name, lo, hi) for name, _, lo, hi in self.environment_link_boxes()]
+
+    def environment_link_boxes(self) -> list[tuple[str, int, Vec3, Vec3]]:
+        """(name, link index, bounds) of every environment link with a shape; the links
+        that never move are measured once, those on a drawer or door every time."""
+        key = "environment link boxes"
+        if key not in self.cache:
+            static, moving = [], []
+            parents = {j: p.getJointInfo(self.environment, j, physicsClientId=self.client)
+                       for j in range(p.getNumJoints(self.environment,
+                                                     physicsClientId=self.client))}
+            for name, index in self.environment_links.items():
+                if not p.getCollisionShapeData(self.environment, index,
+                                               physicsClientId=self.client):
+                    continue
+                j, moves = index, False
+                while j >= 0:
+                    moves |= parents[j][2] != p.JOINT_FIXED
+                    j = parents[j][16]
+                if moves:
+                    moving.append((name, index))
+                else:
+                    static.append((name, index, *self.link_bounds(index)))
+            self.cache[key] = (static, moving)
+        static, moving = self.cache[key]
+        return static + [(name, index, *self.link_bounds(index)) for name, index in moving]
 
     def penetration(self, body_a: int, body_b: int, link_b: int | None = None) -> float:
         """Deepest penetration (m, >= 0) between two bodies; 0 when they do not overlap."""
@@ -191,12 +304,38 @@ class World:
                 return repr(obj.name)
         return f"body {body}"
 
+    def _check_in_container(self, spec, src: str, where: str) -> None:
+        """An item `in:` a container names one of the world's and fits inside it."""
+        container = self.containers.get(spec.container)
+        if container is None:
+            raise SetupError(f"unknown container {spec.container!r}; expected one of "
+                             f"{', '.join(self.containers) or 'none (this world has none)'}",
+                             source=src, field=f"{where}.in")
+        local, _ = p.multiplyTransforms(*p.invertTransform(
+            *self.link_frame(container.inside_link)), spec.pose.xyz, (0, 0, 0, 1))
+        ex, ey, ez = self.objects[spec.name].extents
+        c, s = abs(math.cos(spec.pose.yaw)), abs(math.sin(spec.pose.yaw))
+        half_x, half_y = (c * ex + s * ey) / 2, (s * ex + c * ey) / 2
+        if not container.fits(tuple(local), half_x, half_y, ez):
+            (x0, y0, z0), (x1, y1, z1) = container.inside_min, container.inside_max
+            bottom = p.multiplyTransforms(*self.link_frame(container.inside_link),
+                                          (0, 0, z0), (0, 0, 0, 1))[0][2]
+            raise SetupError(
+                f"item {spec.name!r} ({ex:.2f} x {ey:.2f} x {ez:.2f} m) at "
+                f"{list(spec.pose.xyz)} does not fit in {container.name!r}; expected it "
+                f"standing on its bottom (z = {bottom:.2f}), inside {x1 - x0:.2f} x "
+                f"{y1 - y0:.2f} m and at most {z1 - z0:.2f} m tall",
+                source=src, field=f"{where}.pose")
+
     def check_setup_geometry(self, setup: Setup) -> None:
         """Every item stands on its surface and starts inside nothing else."""
         src = str(setup.source)
         surfaces = [n for n in self.environment_links if n != "floor"]
         for i, spec in enumerate(setup.items):
             where = f"items[{i}]"
+            if spec.container is not None:
+                self._check_in_container(spec, src, where)
+                continue
             if spec.surface not in self.environment_links:
                 raise SetupError(f"unknown surface {spec.surface!r}; expected one of "
                                  f"{', '.join(surfaces)}", source=src, field=f"{where}.surface")
@@ -231,11 +370,16 @@ class World:
         base = self.robot.base_pose() if self.robot else (0.0, 0.0, 0.0)
         joints = self.robot.joint_positions() if self.robot else {}
         objects = {name: obj.pose() for name, obj in self.objects.items()}
-        return Snapshot(base=base, joints=joints, objects=objects)
+        return Snapshot(base=base, joints=joints, objects=objects,
+                        world_joints=self.world_joint_positions())
 
     def restore(self, snap: Snapshot) -> None:
         if self.robot:
             self.robot.set_base_pose(*snap.base)
             self.robot.set_joint_positions(snap.joints)
+        for name, value in snap.world_joints.items():
+            index = self.world_joints[name]
+            p.resetJointState(self.environment, index, value, physicsClientId=self.client)
+            self._hold_world_joint(index, value)
         for name, (pos, orn) in snap.objects.items():
             self.objects[name].set_pose(pos, orn)

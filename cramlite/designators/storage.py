@@ -1,0 +1,428 @@
+"""Opening and closing drawers and cupboards: `OpenAction`, `CloseAction` (PyCRAM's names).
+
+`AccessingLocation` offers base poses from which an arm can grasp a container's handle and
+follow it through the whole opening (or closing): the handle's path is sampled (about a
+centimetre apart: straight for a drawer, an arc for a door), each sample solved by IK from
+the previous one, and every state of the arm on that path checked with the drawer or door
+where it will be then, together with the pre-grasp and the retreat. The base pose must be
+free at every stage of the opening (an open drawer or door takes room). The action then
+navigates there, grasps the handle, and executes one trajectory in which the arm follows
+the handle and the joint moves with it (items inside a drawer ride along), timed at the
+handle speed of `ExecutionOptions`. Failures are typed (`ContainerManipulationFailed`) and
+fall through to the next base pose or arm.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from cramlite.designators.actions import NavigateAction, ParkArmsAction
+from cramlite.designators.context import RobotContext, occupancy_map
+from cramlite.designators.failures import (
+    ContainerManipulationFailed,
+    ObjectNotFound,
+    PlanFailure,
+)
+from cramlite.designators.grasps import in_base_frame
+from cramlite.designators.locations import CostmapLocation, held
+from cramlite.designators.motions import MoveArmJointsMotion, MoveGripperMotion, gripper_joints
+from cramlite.designators.tasks import recorded
+from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names
+from cramlite.motion.trajectory import time_along_path, wrap_angle
+from cramlite.world.bodies import Vec3
+from cramlite.world.containers import Container
+from cramlite.world.pr2 import TORSO_JOINT
+
+BasePose = tuple[float, float, float]
+#: Handle path samples: about this far apart along the handle's way.
+HANDLE_STEP_M = 0.02
+#: Pre-grasp and retreat: this far back from the handle along the approach.
+HANDLE_CLEARANCE_M = 0.10
+#: Base poses may face the handle up to this far off the container's front normal.
+MAX_SQUINT_RAD = math.radians(60)
+#: Stages of the opening at which the base pose must be clear of the drawer or door.
+FOOTPRINT_STAGES = 5
+
+
+@dataclass(frozen=True)
+class HandlePath:
+    """The joint values of the container along an opening or closing, the handle grasp
+    pose (world) at each, and the distance the handle has travelled (m)."""
+
+    values: np.ndarray
+    poses: list[pin.SE3]
+    arc_m: np.ndarray
+
+
+def handle_path(ctx: RobotContext, container: Container, start: float, end: float,
+                ) -> HandlePath:
+    world = ctx.world
+    with world.joint_at(container.joint, end):
+        far = _grasp_pose(world, container)
+    with world.joint_at(container.joint, start):
+        near = _grasp_pose(world, container)
+    length = float(np.linalg.norm(far.translation - near.translation))
+    if container.kind != "drawer":  # an arc: its length from the angle and the radius
+        with world.joint_at(container.joint, 0.0):
+            hinge = np.asarray(world.link_frame(container.link)[0])
+        radius = float(np.linalg.norm((near.translation - hinge)[:2]))
+        length = radius * abs(end - start)
+    count = max(2, math.ceil(length / HANDLE_STEP_M) + 1)
+    values = np.linspace(start, end, count)
+    poses = []
+    for value in values:
+        with world.joint_at(container.joint, float(value)):
+            poses.append(_grasp_pose(world, container))
+    steps = [float(np.linalg.norm(b.translation - a.translation))
+             for a, b in zip(poses[:-1], poses[1:], strict=True)]
+    return HandlePath(values, poses, np.concatenate([[0.0], np.cumsum(steps)]))
+
+
+def _grasp_pose(world, container: Container) -> pin.SE3:
+    """Where the tool frame grasps the handle: at the grasp point, pointing into the
+    container's front (the moving link's x axis), rolled to the handle's bar."""
+    pos, (qx, qy, qz, qw) = world.link_frame(container.link)
+    frame = pin.SE3(pin.Quaternion(qw, qx, qy, qz).toRotationMatrix(), np.asarray(pos))
+    roll = pin.SE3(pin.rpy.rpyToMatrix(container.roll, 0.0, 0.0), np.asarray(container.grasp))
+    return frame * roll
+
+
+def backed_off(pose: pin.SE3, distance: float) -> pin.SE3:
+    return pin.SE3(pose.rotation, pose.translation - distance * pose.rotation[:, 0])
+
+
+@dataclass(frozen=True)
+class AccessPose:
+    """A base pose and arm that can follow a handle, with every joint state checked."""
+
+    base: BasePose
+    arm: str
+    container: str
+    names: tuple[str, ...]  #: torso and the arm's joints (the order of `states`)
+    pre_joints: dict[str, float]
+    states: np.ndarray  #: arm states along the handle path (grasp first)
+    values: np.ndarray  #: the container's joint value at each state
+    arc_m: np.ndarray  #: the handle's travel at each state
+    post_joints: dict[str, float]
+
+    def joints_at(self, i: int) -> dict[str, float]:
+        return {n: float(v) for n, v in zip(self.names, self.states[i], strict=True)}
+
+    def describe(self) -> str:
+        x, y, yaw = self.base
+        return f"base ({x:.2f}, {y:.2f}, {math.degrees(yaw):.0f} deg) {self.arm} arm"
+
+
+class AccessingLocation:
+    """Base poses from which one of `arms` follows `container`'s handle from joint value
+    `start` to `end`, best first (stand-off and travel, as `CostmapLocation`)."""
+
+    def __init__(self, container: Container, start: float, end: float,
+                 arms: Sequence[str] = ARMS, max_ik_checks: int = 24):
+        self.container = container
+        self.start, self.end = start, end
+        self.arms = list(arms)
+        self.max_ik_checks = max_ik_checks
+        self.rejected = {"footprint": 0, "ik": 0, "arm collision": 0}
+
+    def ground(self, ctx: RobotContext) -> Iterator[AccessPose]:
+        path = handle_path(ctx, self.container, self.start, self.end)
+        middle = path.poses[len(path.poses) // 2]
+        facing = math.atan2(middle.rotation[1, 0], middle.rotation[0, 0])
+        point = tuple(middle.translation)
+        maps = self._stage_maps(ctx)
+        rings = CostmapLocation(point, {"handle": 0.0}, "", self.arms)
+        checks = 0
+        # what worked before in this world first (the same container, the same stretch)
+        known = [(0.0, base, arm, "") for base, arm in ctx.world.cache.get(self._key(), [])
+                 if arm in self.arms]
+        for _, base, arm, _ in itertools.chain(known, rings.candidates(ctx)):
+            if abs(wrap_angle(base[2] - facing)) > MAX_SQUINT_RAD:
+                continue
+            if not all(_footprint_free(ctx, stage, base) for stage in maps):
+                self.rejected["footprint"] += 1
+                continue
+            if checks >= self.max_ik_checks:
+                return
+            checks += 1
+            access = self.reach_from(ctx, base, arm, path)
+            if access is not None:
+                worked = ctx.world.cache.setdefault(self._key(), [])
+                if (base, arm) not in worked:
+                    worked.insert(0, (base, arm))
+                yield access
+
+    def _key(self) -> tuple:
+        return ("access", self.container.name, round(self.start, 3), round(self.end, 3))
+
+    def _stage_maps(self, ctx: RobotContext) -> list:
+        out = []
+        for value in np.linspace(self.start, self.end, FOOTPRINT_STAGES):
+            with ctx.world.joint_at(self.container.joint, float(value)):
+                out.append(occupancy_map(ctx.world))
+        return out
+
+    def reach_from(self, ctx: RobotContext, base: BasePose, arm: str,
+                   path: HandlePath | None = None) -> AccessPose | None:
+        """IK along the handle path from one base pose, every state checked (or None)."""
+        path = path or handle_path(ctx, self.container, self.start, self.end)
+        ik = arm_ik(arm)
+        names = tuple([TORSO_JOINT, *arm_joint_names(arm)])
+        torso = ctx.modules.joint_positions([TORSO_JOINT])[TORSO_JOINT]
+        seed = ctx.ik_seeds.get((arm, "handle", self.container.name))
+        # both ends first: most base poses fail there, before the whole path is solved
+        for pose in (path.poses[0], path.poses[-1]):
+            if ik.solve(in_base_frame(pose, base), ctx.rng, seed, fixed_torso_m=torso,
+                        restarts=4) is None:
+                self.rejected["ik"] += 1
+                return None
+        chain = []
+        for i, pose in enumerate(path.poses):
+            local = in_base_frame(pose, base)
+            solution = ik.solve(local, ctx.rng, seed if i == 0 else chain[-1],
+                                fixed_torso_m=torso, restarts=4 if i == 0 else 0)
+            if solution is None:
+                self.rejected["ik"] += 1
+                return None
+            chain.append(solution.joints)
+        pre = ik.solve(in_base_frame(backed_off(path.poses[0], HANDLE_CLEARANCE_M), base),
+                       ctx.rng, chain[0], fixed_torso_m=torso, restarts=1)
+        post = ik.solve(in_base_frame(backed_off(path.poses[-1], HANDLE_CLEARANCE_M), base),
+                        ctx.rng, chain[-1], fixed_torso_m=torso, restarts=1)
+        if pre is None or post is None:
+            self.rejected["ik"] += 1
+            return None
+        states, values, arc = _densify(ctx, names, chain, path)
+        if not self._free(ctx, base, arm, names, states, values, pre.joints, post.joints):
+            self.rejected["arm collision"] += 1
+            return None
+        ctx.ik_seeds[(arm, "handle", self.container.name)] = chain[0]
+        return AccessPose(base, arm, self.container.name, names, pre.joints, states, values,
+                          arc, post.joints)
+
+    def _free(self, ctx: RobotContext, base: BasePose, arm: str, names: tuple[str, ...],
+              states: np.ndarray, values: np.ndarray, pre: dict[str, float],
+              post: dict[str, float]) -> bool:
+        """Every state free with the container (and what is inside) where it is then: the
+        gripper open at the pre-grasp and retreat, closed on the handle (which it may
+        touch) in between."""
+        world, robot = ctx.world, ctx.world.robot
+        container = self.container
+        touch = (container.handle,)
+        others = ctx.held_objects()
+        exclude = set(held(ctx))
+        before = ctx.modules.world_joint_positions()[container.joint]
+        stages = [(pre, self.start, "open")]
+        stages += [(dict(zip(names, q, strict=True)), float(v), "close")
+                   for q, v in zip(states, values, strict=True)]
+        stages.append((post, self.end, "open"))
+        with ctx.collisions.preserved([*world.objects]):
+            robot.set_base_pose(*base)
+            try:
+                for joints, value, gripper in stages:
+                    robot.set_joint_positions(gripper_joints(arm, gripper))
+                    world.set_world_joint(container.joint, value, exclude)  # items ride along
+                    scene = ctx.collisions.scene(names, others, ignore=touch)
+                    if not scene.is_free(np.array([joints[n] for n in names])):
+                        return False
+            finally:
+                world.set_world_joint(container.joint, before, exclude)
+        return True
+
+    def describe_rejections(self) -> str:
+        total = sum(self.rejected.values())
+        if not total:
+            return ""
+        why = {"footprint": "base in the way of the opening", "ik": "handle out of reach",
+               "arm collision": "arm would hit something"}
+        return (f"{total} base poses ({'/'.join(self.arms)} arm): " +
+                ", ".join(f"{n} {why[k]}" for k, n in self.rejected.items() if n))
+
+
+def _footprint_free(ctx: RobotContext, occupancy, base: BasePose) -> bool:
+    checker = ctx.checker
+    saved = checker.occupancy
+    checker.occupancy = occupancy
+    try:
+        return checker.is_free(*base)
+    finally:
+        checker.occupancy = saved
+
+
+def _densify(ctx: RobotContext, names: tuple[str, ...], chain: list[dict[str, float]],
+             path: HandlePath) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The IK chain with states inserted where a joint would jump more than the allowed
+    step (the container's value and the handle's travel interpolated with them)."""
+    limits = ctx.limits
+    steps = limits.max_steps(names)
+    states = [np.array([chain[0][n] for n in names])]
+    values, arc = [path.values[0]], [path.arc_m[0]]
+    for i in range(1, len(chain)):
+        a = states[-1]
+        b = limits.unwrap_goal(names, a, np.array([chain[i][n] for n in names]))
+        count = max(1, math.ceil(float(np.max(np.abs(b - a) / steps)) - 1e-9))
+        for k in range(1, count + 1):
+            f = k / count
+            states.append(a + f * (b - a))
+            values.append(path.values[i - 1] + f * (path.values[i] - path.values[i - 1]))
+            arc.append(path.arc_m[i - 1] + f * (path.arc_m[i] - path.arc_m[i - 1]))
+    return np.array(states), np.array(values), np.array(arc)
+
+
+@dataclass(frozen=True)
+class FollowHandleMotion:
+    """The arm follows the handle along a checked path; the drawer or door moves with it."""
+
+    access: AccessPose
+    joint: str
+
+    @recorded
+    def perform(self, ctx: RobotContext) -> None:
+        a = self.access
+        trajectory = time_along_path(a.names, a.states, a.arc_m, ctx.limits,
+                                     ctx.options.handle_speed_m_s,
+                                     ctx.options.handle_accel_m_s2,
+                                     world={self.joint: a.values})
+        ctx.move_joints(trajectory)
+
+
+def container_named(ctx: RobotContext, name: str) -> Container:
+    container = ctx.world.containers.get(name)
+    if container is None:
+        raise ObjectNotFound(f"no container {name!r} in the world; expected one of "
+                             f"{', '.join(ctx.world.containers) or 'none'}", obj=name)
+    return container
+
+
+def _move_container(ctx: RobotContext, name: str, target: str, arms: Sequence[str] | None,
+                    ) -> None:
+    container = container_named(ctx, name)
+    goal = container.open_value if target == "open" else 0.0
+    now = ctx.modules.world_joint_positions()[container.joint]
+    if abs(now - goal) < 1e-3:
+        return
+    free = [a for a in (arms or ARMS) if a not in ctx.holding]
+    if not free:
+        raise ContainerManipulationFailed(f"cannot {target} it: both hands are full", obj=name)
+    tried: list[str] = []
+    # the whole way from one base pose, or else in stages (a door that opens wide: pulled
+    # half way from one pose, then on from another), each from its own base pose; how many
+    # stages it took is remembered for this world
+    key = ("stages", name, target)
+    known = ctx.world.cache.get(key)
+    for stages in ([known] if known else []) + [s for s in (1, 2, 3) if s != known]:
+        values = np.linspace(now, goal, stages + 1)
+        done = 0
+        for start, end in zip(values[:-1], values[1:], strict=True):
+            if not _move_stage(ctx, container, float(start), float(end), free, tried):
+                break
+            done += 1
+        if done == stages:
+            ctx.world.cache[key] = stages
+            if target == "open" and name not in ctx.opened:
+                ctx.opened.append(name)
+            elif target == "close" and name in ctx.opened:
+                ctx.opened.remove(name)
+            return
+        if done:  # part of the way: the rest cannot be done in smaller steps from here
+            break
+    raise ContainerManipulationFailed(f"no base pose and arm can {target} it", obj=name,
+                                      tried=tried)
+
+
+def _move_stage(ctx: RobotContext, container: Container, start: float, end: float,
+                arms: list[str], tried: list[str]) -> bool:
+    """Follow the handle from `start` to `end` from the first base pose and arm that can;
+    False (and what was tried) if none can."""
+    location = AccessingLocation(container, start, end, arms)
+    verb = "opened" if end > start else "closed"
+    for attempt, access in enumerate(location.ground(ctx)):
+        if attempt >= ctx.options.max_candidates:
+            break
+        try:
+            _follow(ctx, container, access)
+            ctx.note(f"{verb} {container.name} from {start:.2f} to {end:.2f} from "
+                     f"{access.describe()}")
+            return True
+        except PlanFailure as failure:
+            tried.append(f"{access.describe()}: {failure.kind}: {failure.reason}")
+            ParkArmsAction().perform(ctx)
+    rejected = location.describe_rejections()
+    if rejected:
+        tried.append(f"{start:.2f} to {end:.2f}: {rejected}")
+    return False
+
+
+def _follow(ctx: RobotContext, container: Container, access: AccessPose) -> None:
+    touch = (container.handle,)
+    NavigateAction(access.base).perform(ctx)
+    MoveGripperMotion(access.arm, "open", touch).perform(ctx)
+    MoveArmJointsMotion(access.pre_joints, touch).perform(ctx)
+    MoveArmJointsMotion(access.joints_at(0), touch).perform(ctx)
+    MoveGripperMotion(access.arm, "close", touch).perform(ctx)
+    FollowHandleMotion(access, container.joint).perform(ctx)
+    MoveGripperMotion(access.arm, "open", touch).perform(ctx)
+    MoveArmJointsMotion(access.post_joints, touch).perform(ctx)
+    ParkArmsAction(access.arm).perform(ctx)
+
+
+@dataclass
+class OpenAction:
+    """Open a drawer or a cupboard door: grasp its handle and pull it open."""
+
+    container: str  #: the container's name (see the world's containers)
+    arms: Sequence[str] | None = None  #: arms to try (default: the free ones)
+
+    @recorded
+    def perform(self, ctx: RobotContext) -> None:
+        _move_container(ctx, self.container, "open", self.arms)
+
+
+@dataclass
+class CloseAction:
+    """Close a drawer or a cupboard door: grasp its handle and push it shut."""
+
+    container: str  #: the container's name
+    arms: Sequence[str] | None = None  #: arms to try (default: the free ones)
+
+    @recorded
+    def perform(self, ctx: RobotContext) -> None:
+        _move_container(ctx, self.container, "close", self.arms)
+
+
+def container_of(ctx: RobotContext, obj: str) -> Container | None:
+    """The container an item is inside now, if any (not if it is held)."""
+    if obj in held(ctx):
+        return None
+    for container in ctx.world.containers.values():
+        if obj in ctx.world.items_inside(container):
+            return container
+    return None
+
+
+def container_at(ctx: RobotContext, point: Vec3,
+                 ) -> tuple[Container, Vec3] | tuple[None, None]:
+    """The container whose inside holds a point given as it is with the container closed
+    (a place pose in a drawer), and the point in the inside's frame; (None, None) if none."""
+    from cramlite.world.bullet import p
+
+    world = ctx.world
+    for container in world.containers.values():
+        with world.joint_at(container.joint, 0.0):
+            local, _ = p.multiplyTransforms(*p.invertTransform(
+                *world.link_frame(container.inside_link)), point, (0, 0, 0, 1))
+        (x0, y0, z0), (x1, y1, z1) = container.inside_min, container.inside_max
+        if x0 <= local[0] <= x1 and y0 <= local[1] <= y1 and z0 - 0.02 <= local[2] <= z1:
+            return container, tuple(local)
+    return None, None
+
+
+def is_open(ctx: RobotContext, container: Container) -> bool:
+    value = ctx.modules.world_joint_positions()[container.joint]
+    return value >= container.open_value - 1e-3
