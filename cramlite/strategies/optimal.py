@@ -13,8 +13,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import numpy as np
-
 from cramlite.strategies.base import StrategyError
 from cramlite.strategies.candidates import Candidate
 from cramlite.strategies.opm import OPMStrategy
@@ -49,6 +47,8 @@ class OptimalStrategy(OPMStrategy):
 
     def plan(self, items: Sequence[Candidate], agent: Sequence[float]) -> list[Candidate]:
         """The full order of least total cost from `agent` over `items`."""
+        import numpy as np  # here, not at module level: listing strategies stays fast
+
         n = len(items)
         if n > MAX_OPTIMAL_ITEMS:
             raise StrategyError(f"optimal plans exactly for at most {MAX_OPTIMAL_ITEMS} items, "
