@@ -164,6 +164,17 @@ def test_other_unreadable_setup_files(tmp_path: Path) -> None:
     _assert_user_error(run_cli("show", str(latin)), str(latin), "not UTF-8")
 
 
+def test_run_and_bench_refuse_a_bad_setup_before_any_trial(tmp_path: Path,
+                                                           setup_text: str) -> None:
+    path = _write(tmp_path, setup_text.replace(CUP_TARGET, SPOON_TARGET).replace("name: v1",
+                                                                                "name: bad"))
+    _assert_user_error(run_cli("run", str(path)), "items[3].target")
+    out = tmp_path / "results"
+    bench = run_cli("bench", "--setups", f"v1,{path}", "--out", str(out), "--no-plots")
+    _assert_user_error(bench, str(path), "items[3].target", "overlaps")
+    assert not (out / "trials.csv").exists()
+
+
 def test_a_setup_hash_covers_the_file_and_its_urdfs(tmp_path: Path, setup_text: str) -> None:
     from cramlite.world.setup import load_setup
 
