@@ -135,6 +135,7 @@ def test_failing_and_crashing_trials_are_recorded_and_the_batch_goes_on(tmp_path
     (["--strategies", "opm,baseline,opm"], "'opm' is listed twice"),
     (["--strategies", ","], "at least one strategy"),
     (["--setups", "v1,v1"], "two setups are named 'v1'"),
+    (["--setups", ""], "--setups: expected at least one setup"),
     (["--trials", "0"], "[1, 1000000]"),
     (["--trials", "1000000001"], "[1, 1000000]"),
     (["--workers", "-2"], "positive"),

@@ -155,8 +155,9 @@ def _deep(depth: int) -> str:
     ('{"robot": [0, 0, 0], "seed": ' + "9" * 5000 + ', "items": []}', None,
      "not a usable request"),
     (_deep(100_000), None, "nested too deeply"),
+    (b'\xff\xfe{"robot": [0, 0, 0]}', None, "not UTF-8 text"),
 ])
-def test_odd_requests_are_refused_naming_the_field(text: str, field: str | None,
+def test_odd_requests_are_refused_naming_the_field(text: str | bytes, field: str | None,
                                                    fragment: str) -> None:
     from cramlite.strategies.service import answer_text
 

@@ -26,8 +26,6 @@ class Progress:
             self._quietly(lambda: setattr(self, "_bar", tqdm(
                 total=total, desc="trials", unit="trial", file=self.stream,
                 dynamic_ncols=True)))
-        elif already:
-            self.say(f"resuming, {already} trials already done, {total} to run")
 
     def say(self, message: str) -> None:
         """One line `bench: MESSAGE` (above the bar on a terminal)."""

@@ -125,6 +125,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     strategies = _strategies(args.strategies)
     workers = _workers(args)
     setups = _setups(args.setups)
+    if not setups and not args.random_setups:
+        raise UserInputError("expected at least one setup", field="--setups")
     if args.all_orders:
         for name, setup in setups.items():
             if len(setup.items) > MAX_ALL_ORDERS_ITEMS:

@@ -268,6 +268,12 @@ def _costs(candidates: list[Candidate], values: list[float] | None) -> dict[str,
 
 def decode(text: str | bytes, source: str = "request") -> Any:
     """JSON text to a value; anything that is not valid JSON is a RequestError."""
+    if isinstance(text, bytes):
+        try:
+            text = text.decode("utf-8-sig")
+        except UnicodeDecodeError as exc:
+            raise RequestError(f"not UTF-8 text (byte {exc.start}); expected a JSON object",
+                               source=source) from None
     try:
         return json.loads(text)
     except json.JSONDecodeError as exc:
@@ -275,7 +281,7 @@ def decode(text: str | bytes, source: str = "request") -> Any:
                            f"{exc.colno})", source=source) from None
     except RecursionError:
         raise RequestError("not a usable request (nested too deeply)", source=source) from None
-    except (ValueError, UnicodeDecodeError) as exc:  # e.g. an integer of 5,000 digits
+    except ValueError as exc:  # e.g. an integer of 5,000 digits
         raise RequestError(f"not a usable request ({exc})", source=source) from None
 
 
