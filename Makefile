@@ -1,10 +1,11 @@
 # Two commands: `make run` (set up + run the main job), `make test` (set up + run the tests).
+# `make package-check` builds the wheel and smoke-tests it in a throw-away venv (CI runs it).
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.cramlite-installed
 
-.PHONY: run test lint clean
+.PHONY: run test package-check clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -18,6 +19,9 @@ run: $(STAMP)
 test: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q
+
+package-check:
+	PYTHON=$(PYTHON) bash .ci/package-check
 
 clean:
 	rm -rf $(VENV) results *.png

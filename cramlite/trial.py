@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from cramlite.designators import ExecutionOptions, RobotContext, SimulatedProcessModules
+from cramlite.designators.tasks import time_in
 from cramlite.errors import SetupError
 from cramlite.plan_names import PLAN_NAMES  # noqa: F401  (re-exported)
 from cramlite.strategies import make_strategy
@@ -41,6 +42,8 @@ class TrialResult:
     drive_s: float  #: robot time of the executed base trajectories
     arm_s: float  #: robot time of the executed arm, torso and gripper trajectories
     robot_time_s: float  #: wall_s + drive_s + arm_s
+    #: Robot time spent opening and closing drawers and doors (part of drive_s + arm_s).
+    open_close_s: float = 0.0
     items: dict[str, dict[str, Any]] = field(default_factory=dict)
     #: The task tree: every action and motion with its robot-time span and status.
     actions: list[dict[str, Any]] = field(default_factory=list)
@@ -100,6 +103,7 @@ class TrialRunner:
             if ctx.trace is not None:
                 ctx.trace.close()
         items, success = self._check(plan)
+        actions = ctx.tasks.as_list()
         success = success and not report.failures
         return TrialResult(
             setup=self.setup.name, plan=plan, strategy=strategy, seed=seed, success=success,
@@ -107,7 +111,8 @@ class TrialRunner:
             base_path_m=round(ctx.base_path_m, 6), straight_line_m=round(report.straight_line_m, 6),
             wall_s=wall_s, drive_s=round(ctx.drive_s, 6), arm_s=round(ctx.arm_s, 6),
             robot_time_s=wall_s + ctx.drive_s + ctx.arm_s, items=items,
-            actions=ctx.tasks.as_list(), arm_motions=ctx.arm_motions,
+            open_close_s=round(time_in(actions, ("OpenAction", "CloseAction")), 6),
+            actions=actions, arm_motions=ctx.arm_motions,
             planned_arm_motions=ctx.planned_motions, log=ctx.log)
 
     def setup_reference(self) -> str:

@@ -21,6 +21,7 @@ from cramlite.designators import (
 )
 from cramlite.designators.locations import IDEAL_STANDOFF_M
 from cramlite.strategies import Candidate, Strategy
+from cramlite.strategies.base import checked_choice
 from cramlite.world.pr2 import TORSO_UP_M
 from cramlite.world.setup import Setup
 
@@ -76,7 +77,8 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
     while remaining:
         candidates = [item_candidate(ctx, setup, n, then_at(n)) for n in remaining]
         here = robot_position(ctx)
-        chosen = candidates[0] if len(candidates) == 1 else strategy.choose(candidates, here)
+        chosen = candidates[0] if len(candidates) == 1 else \
+            checked_choice(strategy, candidates, here)
         report.order.append(chosen.name)
         remaining.remove(chosen.name)
         try:

@@ -129,33 +129,296 @@ def test_failing_and_crashing_trials_are_recorded_and_the_batch_goes_on(tmp_path
         by_strategy.setdefault(r["strategy"], []).append(r)
     assert all(r["success"] == "True" for r in by_strategy["baseline"])
     for r in by_strategy["badstrategies:Boom"]:
-        assert r["success"] == "False" and r["error_type"] == "RuntimeError"
-        assert "exploded" in r["error"]
+        assert r["success"] == "False" and r["error_type"] == "StrategyError"
+        assert "badstrategies.Boom" in r["error"] and "RuntimeError: strategy exploded" in \
+            r["error"]
     for r in by_strategy["badstrategies:Crash"]:
         assert r["success"] == "False" and r["error_type"] == "WorkerDied"
+    assert "a worker process died with" in result.stderr
+    assert "trial v1/badstrategies:Crash/0 killed its worker process: recorded as WorkerDied" \
+        in result.stderr
 
 
 @pytest.mark.parametrize(("args", "expected"), [
     (["--setups", "v1,v9"], "v9"),
     (["--strategies", "opm,greedy"], "greedy"),
-    (["--trials", "0"], "positive"),
+    (["--strategies", "opm,baseline,opm"], "'opm' is listed twice"),
+    (["--strategies", ","], "at least one strategy"),
+    (["--setups", "v1,v1"], "two setups are named 'v1'"),
+    (["--setups", ""], "--setups: expected at least one setup"),
+    (["--trials", "0"], "[1, 1000000]"),
+    (["--trials", "1000000001"], "[1, 1000000]"),
     (["--workers", "-2"], "positive"),
+    (["--workers", "100000"], "--workers: 100000 local workers"),
     (["--random-setups", "0"], "positive"),
+    (["--trial-timeout", "0"], "seconds > 0"),
+    (["--trial-timeout", "nan"], "seconds > 0"),
     (["--scheduler", "tcp://127.0.0.1:1"], "--executor dask"),
     (["--executor", "slurm"], "local"),
+    (["--executor", "dask", "--scheduler", "tcp://127.0.0.1:1"],
+     "--scheduler: cannot reach the Dask scheduler at tcp://127.0.0.1:1"),
+    (["--executor", "dask", "--scheduler", "tcp://no-such-host.invalid:8786"],
+     "cannot reach the Dask scheduler at tcp://no-such-host.invalid:8786"),
+    (["--executor", "dask", "--scheduler", "tcp://127.0.0.1"], "malformed"),
+    (["--executor", "dask", "--scheduler", "127.0.0.1:port"], "malformed"),
+    (["--executor", "dask", "--scheduler", "foo://bar:1"], "malformed"),
+    (["--executor", "dask", "--scheduler", "tcp://127.0.0.1:70000"], "malformed"),
 ])
 def test_bad_arguments_exit_2_and_list_the_choices(tmp_path: Path, args, expected) -> None:
+    start = time.perf_counter()
     result = bench(tmp_path / "x", *args)
+    print(result.stderr)
     assert result.returncode == 2
     assert expected in result.stderr
-    assert "Traceback" not in result.stderr
-    if "--setups" in args:
+    assert "Traceback" not in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    assert time.perf_counter() - start < 20  # fails fast (no 30 s connection wait)
+    assert not (tmp_path / "x").exists()  # refused before the results folder is made
+    if "--setups" in args and "v9" in args[1]:
         assert "v1, v2, v3, v4, v5" in result.stderr
-    if "--strategies" in args:
+    if "greedy" in args[-1]:
         assert "opm, baseline, random" in result.stderr
 
 
-def test_dask_executor_gives_the_same_rows_as_the_local_one(tmp_path: Path) -> None:
+def test_out_that_cannot_be_a_results_folder(tmp_path: Path) -> None:
+    afile = tmp_path / "afile"
+    afile.write_text("not a folder")
+    for out, expected in ((afile, "is a file; expected a folder"),
+                          (afile / "below", "cannot create or write the folder"),
+                          (Path("/sys/cramlite-results"), "cannot create or write the folder")):
+        result = bench(out, *SMALL)
+        print(result.stderr)
+        assert result.returncode == 2 and "Traceback" not in result.stderr
+        assert result.stderr.strip().startswith(f"cramlite bench: error: {out}: --out: ")
+        assert expected in result.stderr
+
+
+def test_a_second_bench_into_the_same_folder_is_refused_naming_the_first(
+        tmp_path: Path) -> None:
+    from cramlite.bench.lock import FolderLock
+
+    out = tmp_path / "shared"
+    out.mkdir()
+    with FolderLock(out):  # this test process plays the first bench
+        second = bench(out, *SMALL)
+        print(second.stderr)
+        assert second.returncode == 2
+        assert f"in use by another bench (pid {os.getpid()} on " in second.stderr
+        assert not (out / "trials.csv").exists()
+    after = bench(out, "--setups", "v1", "--strategies", "baseline", "--trials", "1",
+                  "--no-plots", "--workers", "1")
+    assert after.returncode == 0, after.stderr  # the lock went with its holder
+
+
+def test_resume_is_keyed_by_setup_content_and_plan(tmp_path: Path) -> None:
+    out = tmp_path / "s"
+    args = ["--strategies", "baseline", "--trials", "1", "--no-plots", "--workers", "1"]
+    assert bench(out, "--setups", "v1", *args).returncode == 0
+    moved = tmp_path / "my.yaml"  # still named v1 inside, another start pose
+    moved.write_text((ROOT / "worlds" / "setups" / "v1.yaml").read_text().replace(
+        "start: [-0.5, -1.8, 1.5708]", "start: [-0.4, -1.6, 1.5708]"))
+    refused = bench(out, "--setups", str(moved), *args)
+    print(refused.stderr)
+    assert refused.returncode == 2
+    assert "holds trials of another setup named 'v1'" in refused.stderr
+    assert len(rows(out)) == 1
+    same = bench(out, "--setups", "v1", *args)
+    assert "(1 already in" in same.stderr and len(rows(out)) == 1
+    other_plan = bench(out, "--setups", "v1", *args, "--plan", "clear-table")
+    assert other_plan.returncode == 0, other_plan.stderr
+    assert "(0 already in" in other_plan.stderr
+    assert sorted(r["plan"] for r in rows(out)) == ["clear-table", "set-table"]
+    (out / "trials.csv").write_text("setup,plan,strategy\nv1,set-table,opm\n")  # old format
+    old = bench(out, "--setups", "v1", *args)
+    assert old.returncode == 2 and "has other columns" in old.stderr
+
+
+def test_a_closed_progress_stream_changes_no_result(tmp_path: Path) -> None:
+    out = tmp_path / "p"
+    proc = subprocess.Popen([sys.executable, "-m", "cramlite", "bench", "--out", str(out),
+                             *SMALL, "--workers", "2"], cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT)  # as `2>&1 | head -1`
+    print(proc.stdout.readline())
+    proc.stdout.close()
+    assert proc.wait(timeout=300) in (0, 141)
+    table = rows(out)
+    print([(r["strategy"], r["trial"], r["success"], r["error_type"]) for r in table])
+    assert len(table) == 4 and all(r["success"] == "True" for r in table)
+    again = bench(out, *SMALL)
+    assert "(4 already in" in again.stderr and "| v1 | opm | 2 | 100% |" in again.stdout
+
+
+HANGING = """
+import time
+from cramlite.strategies import Strategy
+
+class Hang(Strategy):
+    name = "hang"
+    def choose(self, remaining, agent):
+        while True:
+            time.sleep(0.05)
+"""
+
+
+def _children(pid: int) -> list[int]:
+    import psutil
+
+    return [p.pid for p in psutil.Process(pid).children(recursive=True)]
+
+
+def _gone(pids: list[int], within_s: float) -> bool:
+    import psutil
+
+    deadline = time.time() + within_s
+    while time.time() < deadline:
+        alive = [p for p in pids if psutil.pid_exists(p)
+                 and psutil.Process(p).status() != psutil.STATUS_ZOMBIE]
+        if not alive:
+            return True
+        time.sleep(0.1)
+    return False
+
+
+@pytest.fixture
+def hanging(tmp_path: Path) -> dict:
+    (tmp_path / "hanging.py").write_text(HANGING)
+    return {"PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT)])}
+
+
+def test_a_hanging_trial_times_out_and_the_batch_goes_on(tmp_path: Path, hanging) -> None:
+    out = tmp_path / "t"
+    result = bench(out, "--setups", "v1", "--strategies", "baseline,hanging:Hang", "--trials",
+                   "2", "--workers", "2", "--trial-timeout", "4", "--no-plots", env=hanging)
+    print(result.stderr[-1500:])
+    assert result.returncode == 1
+    table = rows(out)
+    assert len(table) == 4
+    for r in table:
+        if r["strategy"] == "baseline":
+            assert r["success"] == "True"
+        else:
+            assert r["success"] == "False" and r["error_type"] == "Timeout"
+            assert "trial timeout (4 s)" in r["error"]
+    assert "exceeded the trial timeout (4 s): recorded as Timeout, its worker killed" in \
+        result.stderr
+
+
+@pytest.mark.parametrize("how", ["SIGTERM", "SIGINT twice", "SIGKILL"])
+def test_stopping_a_bench_leaves_no_worker_behind(tmp_path: Path, hanging, how: str) -> None:
+    out = tmp_path / "k"
+    proc = subprocess.Popen([sys.executable, "-m", "cramlite", "bench", "--out", str(out),
+                             "--setups", "v1", "--strategies", "baseline,hanging:Hang",
+                             "--trials", "3", "--workers", "2", "--no-plots"], cwd=ROOT,
+                            env={**os.environ, **hanging}, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while time.time() < deadline and len(rows(out) if (out / "trials.csv").exists()
+                                         else []) < 1:
+        time.sleep(0.2)  # a baseline trial is written; a hanging one is running
+    workers = _children(proc.pid)
+    assert len(workers) >= 2
+    start = time.time()
+    if how == "SIGTERM":
+        proc.terminate()
+    elif how == "SIGKILL":
+        proc.kill()
+    else:
+        proc.send_signal(signal.SIGINT)
+        time.sleep(1.0)
+        proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    print(how, proc.returncode, round(time.time() - start, 1), err[-600:])
+    assert time.time() - start < 15  # no wait for the hanging trial
+    assert proc.returncode == {"SIGTERM": 143, "SIGINT twice": 130, "SIGKILL": -9}[how]
+    assert _gone(workers, within_s=10), f"orphaned workers: {workers}"
+    if how != "SIGKILL":
+        assert "Traceback" not in err
+        assert "Run the same command again" in err
+    if how == "SIGINT twice":
+        assert "Ctrl-C again to stop now" in err
+
+
+def test_huge_trial_counts_stream() -> None:
+    from cramlite.bench.specs import BatchPlan, SetupEntry
+
+    setups = {f"s{i}": SetupEntry(f"s{i}.yaml", "h", ("a", "b", "c", "d", "e"))
+              for i in range(5)}
+    plan = BatchPlan(setups, ["opm", "baseline"], 10**6, 0, all_orders=True)
+    assert plan.total() == 5 * 2 * 10**6 + 5 * 120
+    start = time.perf_counter()
+    first = [spec for _, spec in zip(range(3), plan, strict=False)]
+    assert time.perf_counter() - start < 1.0  # a list of ten million specs would take long
+    assert [(s.setup, s.strategy, s.trial) for s in first] == [
+        ("s0", "opm", 0), ("s0", "baseline", 0), ("s0", "opm", 1)]
+    assert plan.contains(first[0].key)
+    assert not plan.contains(("s0", "other-hash", *first[0].key[2:]))
+
+
+def test_all_orders_is_bounded(tmp_path: Path) -> None:
+    from tests.setup_files import many_cups, write
+
+    result = bench(tmp_path / "a", "--setups", str(write(tmp_path, many_cups(11))),
+                   "--all-orders", "--no-plots")
+    print(result.stderr)
+    assert result.returncode == 2 and "expects at most 10 items" in result.stderr
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+@pytest.fixture
+def dask_worker_on_loopback():
+    """A real `dask scheduler` and a stock multi-threaded `dask worker` (with its nanny)
+    on loopback; yields (address, the worker command's pid); stops both afterwards."""
+    pytest.importorskip("distributed")
+    from distributed import Client
+
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    dask = [sys.executable, "-m", "dask"]
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
+    scheduler = subprocess.Popen([*dask, "scheduler", "--host", "127.0.0.1", "--port",
+                                  address.rsplit(":", 1)[1], "--no-dashboard"], **quiet)
+    worker = subprocess.Popen([*dask, "worker", address, "--nthreads", "4",
+                               "--no-dashboard"], **quiet)
+    try:
+        with Client(address, timeout=60) as client:
+            client.wait_for_workers(1, timeout=60)
+            threads = sum(client.nthreads().values())
+        assert threads == 4
+        yield address, worker.pid
+    finally:
+        for proc in (worker, scheduler):
+            proc.terminate()
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+
+
+def test_dask_on_a_threaded_worker_runs_the_trials_and_gives_the_local_rows(
+        tmp_path: Path, dask_worker_on_loopback) -> None:
+    address, worker_pid = dask_worker_on_loopback
+    args = ["--setups", "v1,v2", "--strategies", "opm,baseline", "--trials", "2", "--seed",
+            "7", "--no-plots"]
+    local, dask = tmp_path / "local", tmp_path / "dask"
+    assert bench(local, *args, "--workers", "2").returncode == 0
+    worker_processes = {f"{p}" for p in _children(worker_pid)} | {str(worker_pid)}
+    result = bench(dask, *args, "--executor", "dask", "--scheduler", address)
+    print(result.stderr[-1500:])
+    assert result.returncode == 0
+    assert f"Dask scheduler {address}" in result.stderr
+    ran_on = {r["worker"].rsplit(":", 1)[1] for r in rows(dask)}
+    print("dask worker processes", worker_processes, "rows ran on", ran_on)
+    assert ran_on and ran_on <= worker_processes  # Dask's worker ran them, not a local pool
+    assert comparable(local) == comparable(dask)
+
+
+def test_dask_local_cluster_gives_the_same_rows_as_the_local_one(tmp_path: Path) -> None:
     pytest.importorskip("distributed")
     local, dask = tmp_path / "local", tmp_path / "dask"
     assert bench(local, *SMALL, "--workers", "2").returncode == 0

@@ -83,3 +83,108 @@ def test_shipped_setups_validate_and_a_copy_works(tmp_path: Path, setup_text: st
     result = run_cli("show", str(path), "--out", str(out))
     assert result.returncode == 0, result.stderr
     assert out.stat().st_size > 10_000
+
+
+# -- hardening: every impossible scene is refused when the setup loads ---------------------
+NEGATIVE_BOX = (ROOT_ITEMS := Path(__file__).resolve().parents[1] / "worlds" / "items") \
+    and (ROOT_ITEMS / "milk.urdf").read_text().replace('size="0.075 0.075 0.2"',
+                                                      'size="-0.075 0.075 0.2"')
+
+SPOON_POSE = "pose: [1.45, 0.35, 0.85, 0.0]"
+SPOON_TARGET = "target: [-0.85, 1.0, 0.86, 0.0]"
+CUP_TARGET = "target: [-1.0, 1.1, 0.86, 0.0]"
+START = "start: [-0.5, -1.8, 1.5708]"
+
+
+@pytest.mark.parametrize(("old", "new", "fragments"), [
+    # targets: off the island, in the air, under the floor, two on one spot, in furniture
+    (SPOON_TARGET, "target: [-0.3, 1.0, 0.86, 0.0]", ("items[0].target", "rests on no surface")),
+    (SPOON_TARGET, "target: [-0.85, 1.0, 1.5, 0.0]", ("items[0].target", "in the air")),
+    (SPOON_TARGET, "target: [-0.85, 1.0, -0.5, 0.0]", ("items[0].target", "below the floor")),
+    (SPOON_TARGET, "target: [-0.85, 1.0, 0.0, 0.0]", ("items[0].target", "rests on no surface")),
+    (CUP_TARGET, SPOON_TARGET, ("items[3].target", "overlaps the target of 'spoon'")),
+    (CUP_TARGET, "target: [-0.85, 2.47, 0.86, 0.0]", ("items[3].target", "inside the furniture")),
+    # the robot: outside the kitchen, inside furniture, on an item, unknown keys
+    (START, "start: [10.0, 0.0, 0.0]", ("robot.start", "not on the floor of the kitchen")),
+    (START, "start: [-2.4, 0.0, 0.0]", ("robot.start", "not on the floor")),
+    (START, "start: [1.55, 0.2, 0.0]", ("robot.start", "inside 'counter'")),
+    (START, "start: [1.9, -0.5, 0.0]", ("robot.start", "inside 'wall_back'")),
+    (START, START + "\n  speed: 2", ("robot.speed", "unknown key; expected only ['start']")),
+    # numbers: 400 digits, NaN, infinity, a yaw of many turns
+    (SPOON_POSE, "pose: [" + "1" * 400 + ", 0.35, 0.85, 0.0]",
+     ("items[0].pose", "integer with 400 digits")),
+    (SPOON_POSE, "pose: [1.45, .nan, 0.85, 0.0]", ("items[0].pose", "value 2 must be finite")),
+    (SPOON_POSE, "pose: [1.45, 0.35, .inf, 0.0]", ("items[0].pose", "value 3 must be finite")),
+    (SPOON_POSE, "pose: [1.45, 0.35, 0.85, 100.0]", ("items[0].pose", "within +-2 pi")),
+    (START, "start: [-0.5, -1.8, 1.0e+300]", ("robot.start", "within +-2 pi")),
+    (SPOON_POSE, "pose: [" + "7" * 5000 + ", 0.35, 0.85, 0.0]", ("unusable YAML",)),
+    # names end up in file names and CSV columns
+    ("name: v1", "name: ../../etc/v1", ("name", "'../../etc/v1'", "file names")),
+    ("name: v1", "name: 'a\\\\b'", ("name", "file names")),
+    ("name: v1", "name: ''", ("name", "file names")),
+    ("  - name: spoon", "  - name: soup spoon", ("items[0].name", "'soup spoon'")),
+])
+def test_impossible_setups_are_refused_at_load(tmp_path: Path, setup_text: str, old: str,
+                                               new: str, fragments: tuple[str, ...]) -> None:
+    assert old in setup_text
+    path = _write(tmp_path, setup_text.replace(old, new, 1))
+    _assert_user_error(run_cli("show", str(path), "--out", str(tmp_path / "x.png")),
+                       str(path), *fragments)
+    assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize(("urdf", "fragments"), [
+    ("garbage, not XML", ("items[0].type", "not well-formed XML")),
+    ("<robot name='x'/>", ("items[0].type", "at least one <link>")),
+    ("<html><link/></html>", ("items[0].type", "expected a URDF")),
+    (NEGATIVE_BOX, ("items[0].type", "box size '-0.075 0.075 0.2'", "3 positive numbers")),
+    (NEGATIVE_BOX.replace('size="-0.075 0.075 0.2"', 'size="0.075 nan 0.2"'),
+     ("items[0].type", "box size")),
+    (NEGATIVE_BOX.replace('size="-0.075 0.075 0.2"', 'size="0.075 0.075 0.2"').replace(
+        'value="1.05"', 'value="-1"'), ("items[0].type", "mass '-1'")),
+    ("<robot name='x'><link name='a'><visual><geometry><mesh filename='nowhere.obj'/>"
+     "</geometry></visual></link></robot>", ("items[0].type", "mesh file 'nowhere.obj'")),
+    ("<robot name='x'><link name='a'><collision><geometry><cylinder radius='0' length='1'/>"
+     "</geometry></collision></link></robot>", ("items[0].type", "cylinder radius '0'")),
+])
+def test_item_urdfs_that_cannot_be_loaded_are_refused(tmp_path: Path, setup_text: str,
+                                                      urdf: str,
+                                                      fragments: tuple[str, ...]) -> None:
+    (tmp_path / "odd.urdf").write_text(urdf)
+    path = _write(tmp_path, setup_text.replace("type: spoon ", "type: odd.urdf ", 1))
+    _assert_user_error(run_cli("show", str(path)), str(path), *fragments)
+
+
+def test_other_unreadable_setup_files(tmp_path: Path) -> None:
+    folder = tmp_path / "folder.yaml"
+    folder.mkdir()
+    _assert_user_error(run_cli("show", str(folder)), str(folder), "not a file")
+    latin = tmp_path / "latin.yaml"
+    latin.write_bytes("name: caf\xe9\n".encode("latin-1"))
+    _assert_user_error(run_cli("show", str(latin)), str(latin), "not UTF-8")
+
+
+def test_run_and_bench_refuse_a_bad_setup_before_any_trial(tmp_path: Path,
+                                                           setup_text: str) -> None:
+    path = _write(tmp_path, setup_text.replace(CUP_TARGET, SPOON_TARGET).replace("name: v1",
+                                                                                "name: bad"))
+    _assert_user_error(run_cli("run", str(path)), "items[3].target")
+    out = tmp_path / "results"
+    bench = run_cli("bench", "--setups", f"v1,{path}", "--out", str(out), "--no-plots")
+    _assert_user_error(bench, str(path), "items[3].target", "overlaps")
+    assert not (out / "trials.csv").exists()
+
+
+def test_a_setup_hash_covers_the_file_and_its_urdfs(tmp_path: Path, setup_text: str) -> None:
+    from cramlite.world.setup import load_setup
+
+    items = Path(__file__).resolve().parents[1] / "worlds" / "items"
+    (tmp_path / "cup.urdf").write_text((items / "cup.urdf").read_text())
+    same = _write(tmp_path, setup_text)
+    assert load_setup(same).content_hash == load_setup("v1").content_hash
+    moved = load_setup(_write(tmp_path, setup_text.replace(START, "start: [-0.4, -1.8, 1.5708]")))
+    assert moved.content_hash != load_setup("v1").content_hash
+    own_cup = load_setup(_write(tmp_path, setup_text.replace("type: cup ", "type: cup.urdf ")))
+    (tmp_path / "cup.urdf").write_text((items / "cup.urdf").read_text() + "<!-- edited -->")
+    edited = load_setup(_write(tmp_path, setup_text.replace("type: cup ", "type: cup.urdf ")))
+    assert edited.content_hash != own_cup.content_hash

@@ -3,6 +3,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 from PIL import Image
 
 from tests.conftest import run_cli
@@ -26,3 +27,40 @@ def test_show_v1_writes_an_image_with_kitchen_robot_and_items(tmp_path: Path) ->
     print(counts)
     for name, count in counts.items():
         assert count > 50, f"{name} not visible ({count} px)"
+
+
+@pytest.mark.parametrize(("args", "fragment"), [
+    (["--width", "0"], "--width: expected a whole number of pixels in [1, 4096], got '0'"),
+    (["--width", "-5"], "--width: expected a whole number of pixels in [1, 4096], got '-5'"),
+    (["--height", "100000"], "--height: expected a whole number of pixels in [1, 4096]"),
+    (["--width", "1e3"], "--width: expected a whole number of pixels"),
+    (["--out", "v1.txt"], "--out: expected an image file name ending in .png"),
+    (["--out", "v1"], "--out: expected an image file name ending in .png"),
+    (["--out", "pictures/"], "--out: expected an image file name"),
+])
+def test_bad_image_options_exit_2_before_loading_anything(args: list[str],
+                                                          fragment: str) -> None:
+    result = run_cli("show", "v1", *args)
+    print(result.stderr)
+    assert result.returncode == 2 and result.stdout == ""
+    assert result.stderr.strip() == f"cramlite show: error: argument {fragment}" or \
+        fragment in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_image_bounds_and_unwritable_places(tmp_path: Path) -> None:
+    small = tmp_path / "deep" / "er" / "v1.jpg"
+    result = run_cli("show", "v1", "--out", str(small), "--width", "1", "--height", "4096")
+    assert result.returncode == 0, result.stderr
+    assert Image.open(small).size == (1, 4096)
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    under_file = run_cli("show", "v1", "--out", str(blocker / "v1.png"))
+    print(under_file.stderr)
+    assert under_file.returncode == 2 and "--out" in under_file.stderr
+    assert "cannot write the image" in under_file.stderr
+    folder = tmp_path / "folder.png"
+    folder.mkdir()
+    onto_folder = run_cli("show", "v1", "--out", str(folder))
+    assert onto_folder.returncode == 2 and "cannot write the image" in onto_folder.stderr
+    assert "Traceback" not in under_file.stderr + onto_folder.stderr

@@ -76,3 +76,124 @@ def test_strategies_command_lists_the_builtins() -> None:
     assert result.returncode == 0
     names = [line.split()[0] for line in result.stdout.splitlines()]
     assert {"opm", "baseline", "random", "nearest", "opm-2step", "optimal"} <= set(names)
+
+
+MISBEHAVING = '''
+from cramlite.strategies import Candidate, Strategy
+
+class Raises(Strategy):
+    name = "raises"
+    def choose(self, remaining, agent):
+        raise KeyError("no idea")
+
+class ReturnsNone(Strategy):
+    name = "returns-none"
+    def choose(self, remaining, agent):
+        return None
+
+class ReturnsStranger(Strategy):
+    name = "returns-stranger"
+    def choose(self, remaining, agent):
+        return Candidate("teapot", (0.0, 0.0, 0.0))
+
+class ReturnsName(Strategy):
+    name = "returns-name"
+    def choose(self, remaining, agent):
+        return remaining[0].name
+
+class BadInit(Strategy):
+    name = "bad-init"
+    def __init__(self, *args, **kwargs):
+        raise RuntimeError("cannot start")
+    def choose(self, remaining, agent):
+        return remaining[0]
+'''
+
+
+@pytest.fixture
+def misbehaving(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    (tmp_path / "misbehaving.py").write_text(MISBEHAVING)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    yield tmp_path
+    sys.modules.pop("misbehaving", None)
+
+
+@pytest.mark.parametrize(("cls", "expected"), [
+    ("Raises", "raised KeyError: 'no idea'"),
+    ("ReturnsNone", "returned None (NoneType); expected one of the 2 remaining candidates"),
+    ("ReturnsStranger", "returned Candidate(name='teapot'"),
+    ("ReturnsName", "returned 'near' (str)"),
+])
+def test_checked_choice_names_a_misbehaving_plugin(misbehaving: Path, cls: str,
+                                                   expected: str) -> None:
+    from cramlite.strategies import Candidate
+    from cramlite.strategies.base import checked_choice
+
+    strategy = make_strategy(f"misbehaving:{cls}")
+    items = [Candidate("near", (1, 0, 0)), Candidate("far", (5, 0, 0))]
+    with pytest.raises(StrategyError) as info:
+        checked_choice(strategy, items, (0, 0, 0))
+    print(info.value)
+    assert f"misbehaving.{cls}" in str(info.value)
+    assert expected in str(info.value)
+
+
+def test_checked_choice_returns_the_remaining_candidate_itself() -> None:
+    from cramlite.strategies import Candidate
+    from cramlite.strategies.base import checked_choice
+
+    items = [Candidate("near", (1, 0, 0)), Candidate("far", (5, 0, 0))]
+    chosen = checked_choice(make_strategy("opm"), items, (0, 0, 0))
+    assert chosen is items[0]
+
+
+def test_a_plugin_whose_constructor_fails_is_named(misbehaving: Path) -> None:
+    with pytest.raises(StrategyError, match=r"misbehaving.BadInit.*RuntimeError: cannot start"):
+        make_strategy("misbehaving:BadInit")
+
+
+@pytest.mark.parametrize(("cls", "expected"), [
+    ("Raises", "raised KeyError"),
+    ("ReturnsNone", "returned None"),
+    ("ReturnsStranger", "returned Candidate(name='teapot'"),
+    ("BadInit", "could not be created"),
+])
+def test_run_with_a_misbehaving_plugin_is_one_clear_line(misbehaving: Path, cls: str,
+                                                         expected: str) -> None:
+    result = run_cli_env(["run", "v1", "--strategy", f"misbehaving:{cls}"],
+                         {"PYTHONPATH": str(misbehaving)})
+    print(result.stderr)
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1
+    assert "--strategy" in lines[0] and f"misbehaving.{cls}" in lines[0]
+    assert expected in lines[0]
+
+
+def test_run_optimal_with_more_than_15_items_is_the_clean_error(tmp_path: Path) -> None:
+    from tests.setup_files import many_cups, write
+
+    path = write(tmp_path, many_cups(16))
+    result = run_cli("run", str(path), "--strategy", "optimal")
+    print(result.stderr)
+    assert result.returncode == 2
+    assert result.stderr.strip() == (
+        "cramlite run: error: --strategy: optimal plans exactly for at most 15 items, got 16; "
+        "use opm or opm-2step for larger tasks")
+
+
+def test_a_request_cannot_import_code_but_the_command_line_can(plugin_path: Path) -> None:
+    env = {"PYTHONPATH": str(plugin_path)}
+    request = REQUEST % "my_strategies:Farthest"
+    refused = run_cli_env(["order"], env, stdin=request)
+    print(refused.stderr)
+    assert refused.returncode == 2
+    assert "strategy" in refused.stderr and "not a registered strategy" in refused.stderr
+    allowed = run_cli_env(["order", "--strategy", "my_strategies:Farthest"], env,
+                          stdin=REQUEST.replace('"strategy": "%s", ', ""))
+    assert allowed.returncode == 0, allowed.stderr
+    assert '"next": "far"' in allowed.stdout
+    with pytest.raises(StrategyError, match="not a registered strategy"):
+        make_strategy("my_strategies:Farthest", registered_only=True)
+    assert make_strategy("farthest", registered_only=True).name == "farthest"  # entry point

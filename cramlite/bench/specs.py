@@ -4,21 +4,26 @@ A trial's seed comes from the batch seed, the setup's name and the trial index (
 the strategy, so trial i of every strategy is paired), through numpy's SeedSequence and
 a CRC of the name, which are the same in every process and on every machine. Any trial
 can be rerun alone with `cramlite run SETUP --strategy S --seed SEED`.
+
+A `BatchPlan` describes the whole batch and yields its specs one at a time, so that a
+batch of a billion trials starts at once and holds only the trials in flight.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 import zlib
+from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-
-import numpy as np
 
 FIXED_ORDER = "fixed-order"
 
 
 def trial_seed(batch_seed: int, setup_name: str, trial: int) -> int:
+    import numpy as np
+
     sequence = np.random.SeedSequence([batch_seed, zlib.crc32(setup_name.encode()), trial])
     return int(sequence.generate_state(1, dtype=np.uint32)[0])
 
@@ -33,33 +38,75 @@ class TrialSpec:
     batch_seed: int
     plan: str = "set-table"
     given_order: tuple[str, ...] = ()
+    #: content hash of the setup (file and URDFs): the worker refuses a file that changed
+    setup_hash: str = ""
     #: Write the trial's trace (cramlite-trace/1) to this file ("" = no trace).
     trace: str = ""
 
     @property
     def key(self) -> tuple[str, ...]:
         """Identity of a trial in a results file (used to resume)."""
-        return (self.setup, self.plan, self.strategy, " ".join(self.given_order),
-                str(self.trial), str(self.batch_seed))
+        return (self.setup, self.setup_hash, self.plan, self.strategy,
+                " ".join(self.given_order), str(self.trial), str(self.batch_seed))
 
     def as_dict(self) -> dict:
         return asdict(self)
 
 
-def make_specs(setups: dict[str, Path], strategies: list[str], trials: int, batch_seed: int,
-               plan: str = "set-table", all_orders: dict[str, list[str]] | None = None,
-               ) -> list[TrialSpec]:
-    """Trials setup by setup; with `all_orders` (setup -> item names) every permutation of
-    each setup's items is added as one fixed-order trial."""
-    specs = []
-    for name, path in setups.items():
-        for trial in range(trials):
-            seed = trial_seed(batch_seed, name, trial)
-            specs.extend(TrialSpec(name, str(path), strategy, trial, seed, batch_seed, plan)
-                         for strategy in strategies)
-        if all_orders and name in all_orders:
-            for index, order in enumerate(itertools.permutations(all_orders[name])):
-                specs.append(TrialSpec(name, str(path), FIXED_ORDER, index,
-                                       trial_seed(batch_seed, name, index), batch_seed, plan,
-                                       tuple(order)))
-    return specs
+@dataclass(frozen=True)
+class SetupEntry:
+    path: str
+    content_hash: str
+    items: tuple[str, ...]  #: item names in baseline order (for all orders)
+
+
+@dataclass(frozen=True)
+class BatchPlan:
+    """Setups x strategies x trials (plus, with `all_orders`, every permutation of each
+    setup's items as one fixed-order trial), for one plan and batch seed."""
+
+    setups: dict[str, SetupEntry]
+    strategies: Sequence[str]
+    trials: int
+    batch_seed: int
+    plan: str = "set-table"
+    all_orders: bool = False
+    #: Folder for the trials' traces ("" = no traces): SETUP-STRATEGY-TRIAL.jsonl.
+    trace_dir: str = ""
+
+    def _trace(self, setup: str, strategy: str, trial: int) -> str:
+        return (str(Path(self.trace_dir) / f"{setup}-{strategy}-{trial}.jsonl")
+                if self.trace_dir else "")
+
+    def total(self) -> int:
+        per_setup = self.trials * len(self.strategies)
+        orders = sum(math.factorial(len(s.items)) for s in self.setups.values()) \
+            if self.all_orders else 0
+        return per_setup * len(self.setups) + orders
+
+    def __iter__(self) -> Iterator[TrialSpec]:
+        for name, entry in self.setups.items():
+            for trial in range(self.trials):
+                seed = trial_seed(self.batch_seed, name, trial)
+                for strategy in self.strategies:
+                    yield TrialSpec(name, entry.path, strategy, trial, seed, self.batch_seed,
+                                    self.plan, (), entry.content_hash,
+                                    self._trace(name, strategy, trial))
+            if self.all_orders:
+                for index, order in enumerate(itertools.permutations(entry.items)):
+                    yield TrialSpec(name, entry.path, FIXED_ORDER, index,
+                                    trial_seed(self.batch_seed, name, index), self.batch_seed,
+                                    self.plan, tuple(order), entry.content_hash,
+                                    self._trace(name, FIXED_ORDER, index))
+
+    def contains(self, key: Sequence[str]) -> bool:
+        """Whether a results row's key (see `TrialSpec.key`) is one of this batch's trials."""
+        setup, setup_hash, plan, strategy, given, trial, batch_seed = key
+        entry = self.setups.get(setup)
+        if entry is None or entry.content_hash != setup_hash or plan != self.plan \
+                or batch_seed != str(self.batch_seed) or not trial.isdigit():
+            return False
+        if strategy == FIXED_ORDER:
+            return (self.all_orders and int(trial) < math.factorial(len(entry.items))
+                    and sorted(given.split()) == sorted(entry.items))
+        return strategy in self.strategies and not given and int(trial) < self.trials

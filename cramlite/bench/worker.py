@@ -1,38 +1,90 @@
 """The function batch workers run: one trial from a spec, as a results row.
 
 Each worker process keeps one `TrialRunner` per setup it has seen (its world is built
-once and reset between trials). This per-process cache lives only in worker processes
-started for a batch; the library itself keeps no global state.
+once and reset between trials). This per-process cache, and the lock that lets only one
+trial at a time use it, live only in worker processes started for a batch; the library
+itself keeps no global state. The lock matters on a stock `dask worker`, which runs
+tasks in several threads of one process: a process has one cache of worlds, one OMPL
+random generator and one set of IK solver data, so two trials at once would corrupt
+each other.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import signal
 import socket
+import threading
 import time
 import traceback
 from typing import Any
 
 from cramlite.bench.specs import FIXED_ORDER, TrialSpec
+from cramlite.designators.tasks import actions_only
 
-_RUNNERS: dict[str, Any] = {}  # setup path -> TrialRunner, in this worker process only
+_RUNNERS: dict[tuple[str, str], Any] = {}  # (setup path, hash) -> TrialRunner, per process
+_TRIAL_LOCK = threading.Lock()  # one trial at a time in this process
+_STARTED: Any = None  # local pool only: a queue that learns when each trial starts
+#: How often a local worker checks that the bench that started it is still alive.
+PARENT_CHECK_S = 1.0
 
 
 def worker_name() -> str:
     return f"{socket.gethostname()}:{os.getpid()}"
 
 
-def run_spec(spec: TrialSpec) -> dict[str, Any]:
-    """Run one trial; an exception inside it becomes a failed row, never a lost trial."""
+def init_local_worker(started: Any, parent_pid: int) -> None:
+    """Initializer of local pool workers: Ctrl-C is the parent's business; tell the parent
+    when a trial starts (for its per-trial timeout); exit when the parent is gone (a
+    killed bench leaves no workers behind)."""
+    global _STARTED
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _STARTED = started
+
+    def watch_parent() -> None:
+        while True:
+            time.sleep(PARENT_CHECK_S)
+            if os.getppid() != parent_pid:
+                os._exit(1)
+
+    threading.Thread(target=watch_parent, name="cramlite-parent-watch", daemon=True).start()
+
+
+def run_spec(spec: TrialSpec, lock_timeout_s: float = -1) -> dict[str, Any]:
+    """Run one trial; an exception inside it becomes a failed row, never a lost trial.
+    Waits at most `lock_timeout_s` (-1: for ever) for another trial of this process."""
+    row = base_row(spec)
+    if not _TRIAL_LOCK.acquire(timeout=lock_timeout_s):
+        row.update(success=False, error_type="WorkerBusy",
+                   error=f"another trial has held this worker process for more than "
+                         f"{lock_timeout_s:g} s (it timed out and cannot be stopped there)")
+        return row
+    try:
+        if _STARTED is not None:
+            _STARTED.put((spec.key, os.getpid()))
+        return _run_locked(spec, row)
+    finally:
+        _TRIAL_LOCK.release()
+
+
+def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
     from cramlite.trial import TrialRunner
 
-    row = base_row(spec)
     start = time.perf_counter()
     try:
-        runner = _RUNNERS.get(spec.setup_path)
+        cache_key = (spec.setup_path, spec.setup_hash)
+        runner = _RUNNERS.get(cache_key)
         if runner is None:
-            runner = _RUNNERS[spec.setup_path] = TrialRunner(spec.setup_path)
+            runner = TrialRunner(spec.setup_path)
+            if spec.setup_hash and runner.setup.content_hash != spec.setup_hash:
+                runner.close()
+                row.update(success=False, error_type="SetupChanged",
+                           error=f"{spec.setup_path} changed since the batch started "
+                                 f"(content hash {runner.setup.content_hash}, expected "
+                                 f"{spec.setup_hash})")
+                return row
+            _RUNNERS[cache_key] = runner
         strategy = "baseline" if spec.strategy == FIXED_ORDER else spec.strategy
         result = runner.run(strategy, spec.plan, spec.seed,
                             order=list(spec.given_order) or None, trace=spec.trace or None)
@@ -46,16 +98,17 @@ def run_spec(spec: TrialSpec) -> dict[str, Any]:
                failure_types=" ".join(f["type"] for f in result.failures),
                base_path_m=result.base_path_m, straight_line_m=result.straight_line_m,
                wall_s=result.wall_s, drive_s=result.drive_s, arm_s=result.arm_s,
-               robot_time_s=result.robot_time_s,
-               items=json.dumps(result.items))
+               open_close_s=result.open_close_s, robot_time_s=result.robot_time_s,
+               items=json.dumps(result.items),
+               actions=json.dumps(actions_only(result.actions), separators=(",", ":")))
     return row
 
 
 def base_row(spec: TrialSpec) -> dict[str, Any]:
-    return {"setup": spec.setup, "plan": spec.plan, "strategy": spec.strategy,
-            "given_order": " ".join(spec.given_order), "trial": spec.trial, "seed": spec.seed,
-            "batch_seed": spec.batch_seed, "success": False, "order": "", "failures": "[]",
-            "failure_types": "", "base_path_m": "", "straight_line_m": "", "wall_s": "",
-            "drive_s": "", "arm_s": "",
-            "robot_time_s": "", "items": "{}", "error_type": "", "error": "",
-            "worker": worker_name()}
+    return {"setup": spec.setup, "setup_hash": spec.setup_hash, "plan": spec.plan,
+            "strategy": spec.strategy, "given_order": " ".join(spec.given_order),
+            "trial": spec.trial, "seed": spec.seed, "batch_seed": spec.batch_seed,
+            "success": False, "order": "", "failures": "[]", "failure_types": "",
+            "base_path_m": "", "straight_line_m": "", "wall_s": "", "drive_s": "", "arm_s": "",
+            "open_close_s": "", "robot_time_s": "", "items": "{}", "actions": "[]",
+            "error_type": "", "error": "", "worker": worker_name()}

@@ -1,36 +1,87 @@
-"""The `cramlite` command line. User mistakes end with one line on stderr and exit 2."""
+"""The `cramlite` command line. User mistakes end with one line on stderr and exit 2.
+
+Commands are registered lazily: `COMMANDS` (in `cli.common`) names each command, its
+module and its one-line help, and only the module of the command being run is imported.
+So `cramlite --help`, `cramlite strategies` and `cramlite order` load neither numpy nor
+the simulator, and start in a few tens of milliseconds.
+"""
 
 from __future__ import annotations
 
 import argparse
+import importlib
+import os
 import sys
 from collections.abc import Callable, Sequence
 
-from cramlite.cli import bench, evaluation, learning, ordering, replay, trials
-from cramlite.cli.common import EXIT_BAD_INPUT, Parser
+from cramlite import __version__
+from cramlite.cli.common import (
+    COMMANDS,
+    EXIT_BAD_INPUT,
+    EXIT_BROKEN_PIPE,
+    Parser,
+)
 from cramlite.errors import UserInputError
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = Parser(prog="cramlite", description="A lightweight, ROS-free robot plan executive.")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (trials, replay, ordering, evaluation, learning, bench):
-        module.register(sub)
+def _selected(argv: Sequence[str]) -> str | None:
+    """The command named on the command line (the first word that is not an option)."""
+    for word in argv:
+        if not word.startswith("-"):
+            return word
+    return None
+
+
+def build_parser(argv: Sequence[str] | None = None, full: bool = False) -> argparse.ArgumentParser:
+    """The parser; only the selected command's module is imported, unless `full`."""
+    argv = sys.argv[1:] if argv is None else argv
+    selected = _selected(argv)
+    parser = Parser(prog="cramlite",
+                    description="A lightweight, ROS-free robot plan executive. "
+                                "`cramlite COMMAND --help` describes each command.")
+    parser.add_argument("--version", action="version", version=f"cramlite {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser,
+                                metavar="COMMAND")
+    registered: set[str] = set()
+    for name, (module, help_text) in COMMANDS.items():
+        if module in registered:
+            continue
+        if full or COMMANDS.get(selected or "", ("",))[0] == module:
+            importlib.import_module(module).register(sub)
+            registered.add(module)
+        else:
+            sub.add_parser(name, help=help_text, add_help=False)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    func: Callable[[argparse.Namespace], int] = args.func
+    argv = sys.argv[1:] if argv is None else list(argv)
     try:
+        parser = build_parser(argv)
+        args = parser.parse_args(argv)
+        func: Callable[[argparse.Namespace], int] = args.func
         return func(args)
     except UserInputError as exc:
-        print(f"cramlite {args.command}: error: {exc}", file=sys.stderr)
+        command = getattr(locals().get("args"), "command", None)
+        print(f"cramlite {command}: error: {exc}" if command else f"cramlite: error: {exc}",
+              file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("cramlite: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # e.g. `cramlite order ... | head -c 10`: end quietly
+        _silence_stdout()
+        return EXIT_BROKEN_PIPE
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null, so the interpreter's final flush does not complain."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):
+        pass
 
 
 if __name__ == "__main__":

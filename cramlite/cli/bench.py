@@ -3,61 +3,154 @@
 from __future__ import annotations
 
 import argparse
-import sys
+import os
 
-from cramlite.bench.execute import EXECUTORS
 from cramlite.cli.common import (
     EXIT_OK,
     EXIT_PLAN_FAILED,
     comma_list,
+    command_help,
+    int_in_range,
     non_negative_int,
+    positive_float,
     positive_int,
 )
 from cramlite.errors import UserInputError
 from cramlite.plan_names import PLAN_NAMES
 
+EXECUTORS = ("local", "dask")  # cramlite.bench.execute.EXECUTORS (tested)
+DEFAULT_TRIAL_TIMEOUT_S = 300.0  # cramlite.bench.execute.DEFAULT_TRIAL_TIMEOUT_S (tested)
+MAX_TRIALS = 1_000_000
+#: --all-orders runs n! trials per setup: 10 items are 3,628,800 already.
+MAX_ALL_ORDERS_ITEMS = 10
+#: Local worker processes per CPU at most (each holds a simulator, ~300 MB).
+MAX_WORKERS_PER_CPU = 4
+EXIT_TERMINATED = 143
 
-def cmd_bench(args: argparse.Namespace) -> int:
-    import os
-    from dataclasses import replace
-    from pathlib import Path
 
-    from cramlite.bench.execute import run_batch
-    from cramlite.bench.plots import write_plots
-    from cramlite.bench.progress import Progress
-    from cramlite.bench.random_setups import generate_setups
-    from cramlite.bench.specs import make_specs
-    from cramlite.bench.store import TrialStore, row_key
-    from cramlite.bench.summary import order_percentiles, paired_tests, summarise, write_summary
+def _strategies(text: str) -> list[str]:
     from cramlite.strategies import StrategyError, available_strategies, strategy_class
-    from cramlite.world.setup import builtin_setup_names, load_setup
 
-    if args.scheduler and args.executor != "dask":
-        raise UserInputError("a scheduler address needs --executor dask", field="--scheduler")
-    strategies = comma_list(args.strategies)
+    strategies = comma_list(text)
     if not strategies:
         raise UserInputError("expected at least one strategy", field="--strategies")
-    for name in strategies:
+    for i, name in enumerate(strategies):
+        if name in strategies[:i]:
+            raise UserInputError(f"{name!r} is listed twice; expected each strategy once",
+                                 field="--strategies")
         try:
             strategy_class(name)
-        except StrategyError:
-            raise UserInputError(f"unknown strategy {name!r}; valid: "
+        except StrategyError as exc:
+            detail = "" if str(exc).startswith("unknown") else f" ({exc})"
+            raise UserInputError(f"unknown strategy {name!r}{detail}; valid: "
                                  f"{', '.join(available_strategies())} or module:Class",
                                  field="--strategies") from None
+    return strategies
+
+
+def _setups(text: str) -> dict:
+    """Load and check every setup now (geometry included), so a bad one is refused before
+    any trial runs."""
+    from cramlite.world.setup import builtin_setup_names, load_setup
+    from cramlite.world.world import World
+
     setups = {}
-    for name in comma_list(args.setups):
+    for name in comma_list(text):
         try:
             setup = load_setup(name)
         except UserInputError as exc:
-            if exc.field is None:  # no such setup at all
+            if exc.field is None and not os.path.exists(name):  # no such setup at all
                 raise UserInputError(f"unknown setup {name!r}; valid: "
                                      f"{', '.join(builtin_setup_names())} or a path to a "
                                      "setup file", field="--setups") from None
             raise
         if setup.name in setups:
             raise UserInputError(f"two setups are named {setup.name!r}", field="--setups")
+        with World.from_setup(setup):
+            pass
         setups[setup.name] = setup
-    out = Path(args.out)
+    return setups
+
+
+def _workers(args: argparse.Namespace) -> int | None:
+    cpus = os.cpu_count() or 1
+    if args.executor == "local" and args.workers and args.workers > MAX_WORKERS_PER_CPU * cpus:
+        raise UserInputError(f"{args.workers} local workers on {cpus} CPU(s); expected at most "
+                             f"{MAX_WORKERS_PER_CPU * cpus}", field="--workers")
+    if args.executor == "dask" and args.scheduler:
+        return args.workers  # None: as many as the cluster has worker processes
+    return args.workers or cpus
+
+
+def _results_folder(path: str):
+    """The --out folder, created, locked for this bench (exit 2 naming the holder)."""
+    from pathlib import Path
+
+    from cramlite.bench.lock import FolderBusy, FolderLock
+
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise UserInputError("is a file; expected a folder for the results", source=path,
+                             field="--out")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        lock = FolderLock(out)
+        lock.acquire()
+    except FolderBusy as exc:
+        raise UserInputError(f"in use by another bench ({exc.holder or 'holder unknown'}); "
+                             "expected a folder no other bench is writing into", source=path,
+                             field="--out") from None
+    except OSError as exc:
+        raise UserInputError(f"cannot create or write the folder ({exc.strerror or exc})",
+                             source=path, field="--out") from None
+    return out, lock
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    if args.scheduler and args.executor != "dask":
+        raise UserInputError("a scheduler address needs --executor dask", field="--scheduler")
+    from cramlite.bench.execute import SchedulerUnreachable, check_scheduler
+
+    if args.executor == "dask":
+        try:
+            if args.scheduler:
+                check_scheduler(args.scheduler)
+            else:
+                import distributed  # noqa: F401
+        except SchedulerUnreachable as exc:
+            raise UserInputError(str(exc), field="--scheduler") from None
+        except ImportError:
+            raise UserInputError("the dask executor needs Dask: pip install 'cramlite[dask]'",
+                                 field="--executor") from None
+    strategies = _strategies(args.strategies)
+    workers = _workers(args)
+    setups = _setups(args.setups)
+    if not setups and not args.random_setups:
+        raise UserInputError("expected at least one setup", field="--setups")
+    if args.all_orders:
+        for name, setup in setups.items():
+            if len(setup.items) > MAX_ALL_ORDERS_ITEMS:
+                raise UserInputError(f"setup {name!r} has {len(setup.items)} items; "
+                                     f"--all-orders runs n! trials and expects at most "
+                                     f"{MAX_ALL_ORDERS_ITEMS} items", field="--all-orders")
+    out, lock = _results_folder(args.out)
+    try:
+        return _run(args, strategies, setups, workers, out)
+    finally:
+        lock.release()
+
+
+def _run(args, strategies, setups, workers, out) -> int:
+    import signal
+
+    from cramlite.bench.execute import SchedulerUnreachable, StopNow, run_batch
+    from cramlite.bench.progress import Progress
+    from cramlite.bench.random_setups import generate_setups
+    from cramlite.bench.specs import BatchPlan, SetupEntry
+    from cramlite.bench.store import StoreMismatch, TrialStore, row_key
+    from cramlite.bench.summary import order_percentiles, paired_tests, summarise, write_summary
+    from cramlite.world.setup import load_setup
+
     store = TrialStore(out)
     store.repair()
     if args.random_setups:
@@ -66,83 +159,110 @@ def cmd_bench(args: argparse.Namespace) -> int:
             setups[name] = load_setup(path)
     if not setups:
         raise UserInputError("expected at least one setup", field="--setups")
-    all_orders = ({n: list(s.baseline_order) for n, s in setups.items()}
-                  if args.all_orders else None)
-    specs = make_specs({n: s.source for n, s in setups.items()}, strategies, args.trials,
-                       args.seed, args.plan, all_orders)
-    if args.traces:
-        traces = out / "traces"
-        specs = [replace(s, trace=str(traces / f"{s.setup}-{s.strategy}-{s.trial}.jsonl"))
-                 for s in specs]
-    done = store.done_keys()
-    todo = [spec for spec in specs if spec.key not in done]
-    workers = args.workers or os.cpu_count() or 1
+    try:
+        store.check_compatible({n: s.content_hash for n, s in setups.items()})
+    except StoreMismatch as exc:
+        raise UserInputError(str(exc), field="--out") from None
+    plan = BatchPlan({n: SetupEntry(str(s.source), s.content_hash, tuple(s.baseline_order))
+                      for n, s in setups.items()}, strategies, args.trials, args.seed,
+                     args.plan, args.all_orders,
+                     str(out / "traces") if args.traces else "")
+    done = {key for key in store.done_keys() if plan.contains(key)}
+    total = plan.total()
     store.write_metadata({k: v for k, v in vars(args).items() if k != "func"}, args.executor)
-    where = (f"Dask scheduler {args.scheduler}, {2 * workers} trials in flight" if args.scheduler
+    where = (f"Dask scheduler {args.scheduler}" if args.scheduler
              else f"{workers} worker(s), executor {args.executor}")
-    print(f"bench: {len(specs)} trials ({len(specs) - len(todo)} already in {store.path}), "
-          f"{where}", file=sys.stderr)
-    progress = Progress(len(todo), already=len(specs) - len(todo))
+    progress = Progress(total - len(done), already=len(done))
+    progress.say(f"{total} trials ({len(done)} already in {store.path}), {where}, trial "
+                 f"timeout {args.trial_timeout:g} s")
 
     def record(row: dict) -> None:
         store.append(row)
         progress.update(row)
 
+    def terminate(signum, frame):
+        raise StopNow()
+
+    previous = signal.signal(signal.SIGTERM, terminate)
     try:
-        outcome = run_batch(todo, record, args.executor, workers, args.scheduler)
+        outcome = run_batch((spec for spec in plan if spec.key not in done), record,
+                            args.executor, workers, args.scheduler, args.trial_timeout,
+                            notify=progress.say)
+    except SchedulerUnreachable as exc:
+        raise UserInputError(str(exc), field="--scheduler") from None
     finally:
+        signal.signal(signal.SIGTERM, previous)
         progress.close()
-    wanted = {spec.key for spec in specs}
-    rows = [r for r in store.rows() if row_key(r) in wanted]
+    rows = [r for r in store.rows() if plan.contains(row_key(r))]
+    if outcome.interrupted:
+        progress.say(f"{'terminated' if outcome.stopped_now else 'interrupted'}; {len(rows)} "
+                     f"of {total} trials are in {store.path}. Run the same command again to "
+                     "finish the rest.")
+        return EXIT_TERMINATED if outcome.stopped_now else 130
     summary = summarise(rows, {n: s.baseline_order for n, s in setups.items()})
     tests = [paired_tests(rows, s) for s in strategies if s != "baseline"] \
         if "baseline" in strategies else []
     text = write_summary(out, summary, tests, order_percentiles(rows) if args.all_orders else [])
+    from cramlite.bench.plots import write_plots
+
     plots = [] if args.no_plots else write_plots(rows, out)
+    failed = [r for r in rows if str(r["success"]) != "True"]
+    if failed:
+        progress.say(f"{len(failed)} of {len(rows)} trials failed (see the error and "
+                     "failures columns)")
     print(text)
     print(f"wrote {store.path}, {out / 'summary.csv'}, {out / 'summary.md'}"
           + (f", {len(plots)} plots" if plots else
              ("" if args.no_plots else " (no plots: pip install cramlite[plots])")))
-    if outcome.interrupted:
-        print(f"bench: interrupted; {len(rows)} of {len(specs)} trials are in {store.path}. "
-              "Run the same command again to finish the rest.", file=sys.stderr)
-        return 130
-    failed = [r for r in rows if str(r["success"]) != "True"]
-    if failed:
-        print(f"bench: {len(failed)} of {len(rows)} trials failed (see error/failures columns)",
-              file=sys.stderr)
     return EXIT_OK if not failed else EXIT_PLAN_FAILED
-
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     bench = sub.add_parser(
-        "bench", help="run many trials (setups x strategies x trials) and summarise them",
+        "bench", help=command_help("bench"),
         description="Defaults reproduce the source's experiment: v1-v5 x {opm, baseline} x "
-                    "10 trials. Results go to OUT/trials.csv (appended as trials finish; "
-                    "rerunning with the same --out resumes), OUT/summary.csv|md and plots. "
-                    "Exit code 0: every trial succeeded, 1: some failed, 2: bad arguments, "
-                    "130: interrupted.")
+                    "10 trials. Results go to OUT/trials.csv (appended as trials finish), "
+                    "OUT/summary.csv|md and plots. Rerunning with the same --out resumes: "
+                    "trials are matched by setup name and content hash, plan, strategy, "
+                    "trial and seed; a folder holding another setup of the same name is "
+                    "refused, and so is a folder another bench is writing into. Every setup "
+                    "is checked before the first trial. Exit code 0: every trial succeeded, "
+                    "1: some failed (Timeout, WorkerDied and plan failures are rows too), "
+                    "2: bad arguments, 130: interrupted (Ctrl-C), 143: terminated (SIGTERM).")
     bench.add_argument("--setups", default="v1,v2,v3,v4,v5",
                        help="comma-separated setup names or paths (default v1..v5)")
     bench.add_argument("--strategies", default="opm,baseline",
-                       help="comma-separated strategy names (default opm,baseline)")
-    bench.add_argument("--trials", type=positive_int, default=10,
+                       help="comma-separated strategy names, each once (default opm,baseline; "
+                            "see `cramlite strategies`; package.module:Class works too)")
+    bench.add_argument("--trials", type=int_in_range(1, f"a whole number in [1, {MAX_TRIALS}]",
+                                                     MAX_TRIALS), default=10,
                        help="trials per setup and strategy (default 10)")
     bench.add_argument("--seed", type=non_negative_int, default=0,
                        help="batch seed; each trial's seed derives from it, the setup and "
-                            "the trial index")
+                            "the trial index (default 0)")
     bench.add_argument("--workers", type=positive_int, default=None,
-                       help="worker processes (default: number of CPUs); with --scheduler, "
-                            "half the number of trials kept in flight on the cluster")
+                       help="local worker processes (default: number of CPUs, at most "
+                            f"{MAX_WORKERS_PER_CPU} per CPU); with --scheduler, half the "
+                            "number of trials kept in flight (default: the cluster's number "
+                            "of worker processes)")
     bench.add_argument("--executor", choices=EXECUTORS, default="local",
-                       help="local process pool (default) or a Dask cluster")
-    bench.add_argument("--scheduler", help="Dask scheduler address (default: a local cluster)")
+                       help="local process pool (default) or Dask (pip install "
+                            "'cramlite[dask]'); any Dask worker works, threads or not: each "
+                            "process runs one trial at a time")
+    bench.add_argument("--scheduler", metavar="ADDRESS",
+                       help="Dask scheduler address, e.g. tcp://HOST:8786 (default: a local "
+                            "Dask cluster)")
+    bench.add_argument("--trial-timeout", type=positive_float, default=DEFAULT_TRIAL_TIMEOUT_S,
+                       metavar="SECONDS",
+                       help="a trial running longer is recorded as Timeout and its local "
+                            "worker replaced (default 300; on Dask counted from submission)")
     bench.add_argument("--all-orders", action="store_true",
-                       help="add every permutation of each setup's items as fixed-order trials")
+                       help="add every permutation of each setup's items as fixed-order "
+                            f"trials (n! per setup; at most {MAX_ALL_ORDERS_ITEMS} items)")
     bench.add_argument("--random-setups", type=positive_int, default=None, metavar="N",
                        help="add N random setups (saved under OUT/setups)")
-    bench.add_argument("--plan", default="set-table", choices=PLAN_NAMES, help="which plan")
+    bench.add_argument("--plan", default="set-table", choices=PLAN_NAMES,
+                       help="which plan (default set-table)")
     bench.add_argument("--out", default="results", help="results folder (default results)")
     bench.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     bench.add_argument("--traces", action="store_true",

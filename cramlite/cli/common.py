@@ -1,14 +1,46 @@
-"""Shared pieces of the command line: exit codes, argument types, small helpers."""
+"""Shared pieces of the command line: the command table, exit codes, argument types.
+
+Importing this module loads no implementation module (no numpy, no simulator), so that
+`cramlite --help` and quick commands start quickly.
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Callable
 
 from cramlite.errors import UserInputError
 
 EXIT_OK, EXIT_PLAN_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+#: The exit code of a process whose output pipe was closed (as if killed by SIGPIPE).
+EXIT_BROKEN_PIPE = 141
+
+#: Every command: the module that registers it and its one-line help. A module is
+#: imported only to run (or describe) one of its own commands.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "show": ("cramlite.cli.trials", "draw a setup headless into a PNG"),
+    "run": ("cramlite.cli.trials", "run one trial of a plan in a setup (headless)"),
+    "strategies": ("cramlite.cli.ordering", "list the ordering strategies by name"),
+    "order": ("cramlite.cli.ordering",
+              "answer JSON ordering requests (the OPM service without ROS)"),
+    "evaluate": ("cramlite.cli.evaluation", "score a strategy against human sequences"),
+    "fit": ("cramlite.cli.evaluation", "grid-search a strategy's parameters (Table 3.4)"),
+    "replay": ("cramlite.cli.replay",
+               "replay a trace (cramlite run --trace): GIF, GUI or collision check"),
+    "train": ("cramlite.cli.learning", "train a learned ordering strategy (RNN, NN, CPT)"),
+    "compare": ("cramlite.cli.learning",
+                "compare strategies on human sequences (Wilcoxon, Figure 3.18)"),
+    "bench": ("cramlite.cli.bench",
+              "run many trials (setups x strategies x trials) and summarise them"),
+}
+#: Image files `show --out` and `run --image` can write (by suffix).
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
+
+
+def command_help(name: str) -> str:
+    return COMMANDS[name][1]
 
 
 class Parser(argparse.ArgumentParser):
@@ -17,7 +49,9 @@ class Parser(argparse.ArgumentParser):
 
 
 def parse_params(text: str | None) -> dict[str, float]:
-    from cramlite.strategies import OPMParams
+    """`--params strong_k=0.2,c=1.7` -> {name: value}; every value is range-checked."""
+    from cramlite.strategies.base import parameter_problem
+    from cramlite.strategies.candidates import OPMParams
 
     params: dict[str, float] = {}
     for part in filter(None, (text or "").split(",")):
@@ -28,12 +62,15 @@ def parse_params(text: str | None) -> dict[str, float]:
                                  f"{', '.join(OPMParams.names())}, got {part!r}",
                                  field="--params")
         try:
-            params[name] = float(value)
+            number = float(value)
         except ValueError:
             raise UserInputError(f"expected a number for {name}, got {value!r}",
                                  field="--params") from None
+        problem = parameter_problem(name, number)
+        if problem:
+            raise UserInputError(f"{name}: {problem}", field="--params")
+        params[name] = number
     return params
-
 
 
 def progress_bar(total: float, desc: str):
@@ -44,6 +81,7 @@ def progress_bar(total: float, desc: str):
 
 
 def strategy_checked(name: str, **kwargs) -> None:
+    """Refuse an unknown or unusable strategy (or parameters) as a --strategy error."""
     from cramlite.strategies import StrategyError, make_strategy
 
     try:
@@ -52,23 +90,46 @@ def strategy_checked(name: str, **kwargs) -> None:
         raise UserInputError(str(exc), field="--strategy") from None
 
 
-
 def comma_list(text: str) -> list[str]:
     return [part.strip() for part in text.split(",") if part.strip()]
 
 
-
-def int_at_least(minimum: int, wording: str) -> Callable[[str], int]:
-    """An argparse type: a whole number >= minimum (the message names what was expected)."""
+def int_in_range(minimum: int, wording: str, maximum: int | None = None,
+                 ) -> Callable[[str], int]:
+    """An argparse type: a whole number in [minimum, maximum] (the message names what was
+    expected)."""
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             value = None
-        if value is None or value < minimum:
+        if value is None or value < minimum or (maximum is not None and value > maximum):
             raise argparse.ArgumentTypeError(f"expected {wording}, got {text!r}")
         return value
     return parse
+
+
+def int_at_least(minimum: int, wording: str) -> Callable[[str], int]:
+    return int_in_range(minimum, wording)
+
+
+def positive_float(text: str) -> float:
+    """An argparse type: a finite number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds > 0, got {text!r}")
+    return value
+
+
+def image_path(text: str) -> str:
+    """An argparse type: a file name with an image suffix PIL writes."""
+    if not text.lower().endswith(IMAGE_SUFFIXES) or text.endswith(("/", "\\")):
+        raise argparse.ArgumentTypeError(
+            f"expected an image file name ending in {', '.join(IMAGE_SUFFIXES)}, got {text!r}")
+    return text
 
 
 positive_int = int_at_least(1, "a positive integer")

@@ -7,6 +7,7 @@ import argparse
 from cramlite.cli.common import (
     EXIT_OK,
     comma_list,
+    command_help,
     non_negative_int,
     positive_int,
     progress_bar,
@@ -101,7 +102,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    train = sub.add_parser("train", help="train a learned ordering strategy (RNN, NN, CPT)",
+    train = sub.add_parser("train", help=command_help("train"),
                            description="Trains on the episodes of a file in the published "
                                        "format; writes MODEL, MODEL.report.json and "
                                        "MODEL.loss.png. Needs the learn extra.")
@@ -119,8 +120,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     train.add_argument("--json", action="store_true", help="print the report as JSON")
     train.set_defaults(func=cmd_train)
 
-    cmp = sub.add_parser("compare", help="compare strategies on human sequences (Wilcoxon, "
-                                         "Figure 3.18)")
+    cmp = sub.add_parser("compare", help=command_help("compare"))
     cmp.add_argument("data", help="CSV of recorded sequences, or `table-setting`")
     cmp.add_argument("--strategies", required=True,
                      help="comma-separated, the first is the reference of the tests, e.g. "

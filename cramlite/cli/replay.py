@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from cramlite.cli.common import EXIT_OK, EXIT_PLAN_FAILED, Parser
+from cramlite.cli.common import EXIT_OK, EXIT_PLAN_FAILED, Parser, command_help
 from cramlite.errors import UserInputError
 
 MAX_SIDE_PX = 4096
@@ -76,7 +76,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     replay: Parser = sub.add_parser(
-        "replay", help="replay a trace (cramlite run --trace): GIF, GUI or collision check",
+        "replay", help=command_help("replay"),
         description="Exit code 0: done (and, with --check, nothing inside anything), 1: --check "
                     "found a penetration, 2: bad input (a malformed trace names its line).")
     replay.add_argument("trace", help="a trace file written by `cramlite run --trace` or "

@@ -7,6 +7,9 @@ import argparse
 from cramlite.cli.common import (
     EXIT_OK,
     EXIT_PLAN_FAILED,
+    command_help,
+    image_path,
+    int_in_range,
     non_negative_int,
     parse_params,
     strategy_checked,
@@ -15,24 +18,37 @@ from cramlite.errors import UserInputError
 from cramlite.plan_names import PLAN_NAMES
 from cramlite.strategies.cost import DIMS
 
+#: Largest image side `show` renders (TinyRenderer takes ~1 s per 10 megapixels).
+MAX_IMAGE_SIDE = 4096
+
+
+def _save_image(image, path: str, option: str) -> str:
+    from cramlite.world.render import save_png
+
+    try:
+        return str(save_png(image, path))
+    except (OSError, ValueError) as exc:
+        reason = getattr(exc, "strerror", None) or str(exc)
+        raise UserInputError(f"cannot write the image ({reason})", source=path,
+                             field=option) from None
+
 
 def cmd_show(args: argparse.Namespace) -> int:
     from cramlite.world import World, load_setup
-    from cramlite.world.render import render, save_png
+    from cramlite.world.render import render
 
     setup = load_setup(args.setup)
     out = args.out or f"{setup.name}.png"
     with World.from_setup(setup) as world:
-        path = save_png(render(world, args.width, args.height), out)
+        path = _save_image(render(world, args.width, args.height), out, "--out")
     print(f"wrote {path} ({setup.name}: {len(setup.items)} items)")
     return EXIT_OK
-
-
 
 
 def cmd_run(args: argparse.Namespace) -> int:
     import json
 
+    from cramlite.strategies import StrategyError
     from cramlite.trial import TrialRunner
     from cramlite.world import load_setup
 
@@ -44,12 +60,15 @@ def cmd_run(args: argparse.Namespace) -> int:
     except RuntimeError as exc:  # no display for --gui
         raise UserInputError(str(exc), field="--gui") from None
     with runner:
-        result = runner.run(args.strategy, args.plan, args.seed, params=params, dims=args.dims,
-                            trace=args.trace)
+        try:
+            result = runner.run(args.strategy, args.plan, args.seed, params=params,
+                                dims=args.dims, trace=args.trace)
+        except StrategyError as exc:  # e.g. optimal with too many items, a broken plugin
+            raise UserInputError(str(exc), field="--strategy") from None
         if args.image:
-            from cramlite.world.render import render, save_png
+            from cramlite.world.render import render
 
-            save_png(render(runner.world), args.image)
+            _save_image(render(runner.world), args.image, "--image")
     if args.json:
         data = result.as_dict()
         if not args.log:
@@ -75,29 +94,52 @@ def cmd_run(args: argparse.Namespace) -> int:
     return EXIT_OK if result.success else EXIT_PLAN_FAILED
 
 
+def _setup_help() -> str:
+    from cramlite.resources import worlds_dir
+
+    shipped = sorted(p.stem for p in (worlds_dir() / "setups").glob("*.yaml"))
+    return f"a shipped setup ({', '.join(shipped)}) or a path to a setup YAML file"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    show = sub.add_parser("show", help="draw a setup headless into a PNG")
-    show.add_argument("setup", help="v1..v5 or a path to a setup YAML file")
-    show.add_argument("--out", help="PNG file to write (default: SETUPNAME.png)")
-    show.add_argument("--width", type=int, default=1024, help="image width in pixels")
-    show.add_argument("--height", type=int, default=768, help="image height in pixels")
+    setup_help = _setup_help()
+    side = int_in_range(1, f"a whole number of pixels in [1, {MAX_IMAGE_SIDE}]", MAX_IMAGE_SIDE)
+    show = sub.add_parser("show", help=command_help("show"),
+                          description="Loads and checks a setup (every mistake is reported as "
+                                      "FILE: FIELD: what was expected, exit code 2) and draws "
+                                      "it with PyBullet's TinyRenderer; no display needed.")
+    show.add_argument("setup", metavar="SETUP", help=setup_help)
+    show.add_argument("--out", type=image_path,
+                      help="image file to write: .png (default SETUPNAME.png), .jpg, .bmp, "
+                           ".tif")
+    show.add_argument("--width", type=side, default=1024,
+                      help=f"image width in pixels, 1-{MAX_IMAGE_SIDE} (default 1024)")
+    show.add_argument("--height", type=side, default=768,
+                      help=f"image height in pixels, 1-{MAX_IMAGE_SIDE} (default 768)")
     show.set_defaults(func=cmd_show)
 
-    run = sub.add_parser("run", help="run one trial of a plan in a setup (headless)",
-                         description="Exit code 0: success, 1: the plan failed, 2: bad input.")
-    run.add_argument("setup", help="v1..v5, another shipped setup, or a path to a setup file")
-    run.add_argument("--plan", default="set-table", choices=PLAN_NAMES, help="which plan")
+    run = sub.add_parser("run", help=command_help("run"),
+                         description="Runs one trial headless and reports the order, the "
+                                     "driven and straight-line distances and the times. Exit "
+                                     "code 0: success, 1: the plan failed, 2: bad input.")
+    run.add_argument("setup", metavar="SETUP", help=setup_help)
+    run.add_argument("--plan", default="set-table", choices=PLAN_NAMES,
+                     help="which plan (default set-table)")
     run.add_argument("--strategy", default="baseline",
-                     help="ordering strategy (see `cramlite strategies`; default baseline)")
-    run.add_argument("--params", help="strategy parameters, e.g. mid_k=0.3,c=1.7")
-    run.add_argument("--dims", default="xy", choices=list(DIMS), help="strategy projection")
-    run.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
+                     help="ordering strategy: a name from `cramlite strategies` or "
+                          "package.module:Class (default baseline)")
+    run.add_argument("--params",
+                     help="strategy parameters, e.g. strong_k=0.2,mid_k=0.3,food_k=1.2,c=1.7 "
+                          "(k in [0, 10], c in (0, 1000]; defaults: the source's best fit)")
+    run.add_argument("--dims", default="xy", choices=list(DIMS),
+                     help="projection the strategy measures distance in (default xy)")
+    run.add_argument("--seed", type=non_negative_int, default=0,
+                     help="random seed of the trial (default 0)")
     run.add_argument("--gui", action="store_true", help="show the PyBullet GUI (needs a display)")
     run.add_argument("--json", action="store_true", help="print one JSON object")
     run.add_argument("--log", action="store_true", help="also print what the plan did")
-    run.add_argument("--image", help="write a PNG of the scene after the trial")
+    run.add_argument("--image", type=image_path,
+                     help="write an image of the scene after the trial (.png, .jpg, ...)")
     run.add_argument("--trace", help="write every executed state to this JSON Lines file "
                                      "(cramlite-trace/1; `cramlite replay` shows it)")
     run.set_defaults(func=cmd_run)

@@ -99,3 +99,20 @@ def recorded(perform: Callable) -> Callable:
             return perform(self, ctx, *args, **kwargs)
 
     return wrapper
+
+
+def actions_only(nodes: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """A task tree (as dictionaries) without its motion nodes: the actions, for reports."""
+    return [{**node, "children": actions_only(node["children"])} for node in nodes
+            if not node["name"].endswith("Motion")]
+
+
+def time_in(nodes: list[dict[str, Any]], names: tuple[str, ...]) -> float:
+    """Robot time spent in nodes with one of `names` (outermost ones, not counted twice)."""
+    total = 0.0
+    for node in nodes:
+        if node["name"] in names and node["end_s"] is not None:
+            total += node["end_s"] - node["start_s"]
+        else:
+            total += time_in(node["children"], names)
+    return total

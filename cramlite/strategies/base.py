@@ -3,20 +3,31 @@ return the candidate to fetch next.
 
 A strategy object lives for one episode (one trial, one human sequence): `reset`
 starts a new one. Every random choice goes through `self.rng`, a numpy Generator the
-caller seeds. Memoryless strategies also expose `tied`, the set they choose uniformly
-from, which exact metrics (expected APE) use instead of sampling.
+caller seeds; it is created on first use (only a tie needs it), so a decision over a few
+items runs in plain Python without importing numpy. Memoryless strategies also expose
+`tied`, the set they choose uniformly from, which exact metrics (expected APE) use
+instead of sampling.
 """
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
-
-import numpy as np
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from cramlite.strategies.candidates import Candidate, OPMParams
 from cramlite.strategies.cost import CostModel, span_weights
+
+if TYPE_CHECKING:
+    import numpy as np
+
+#: Accepted ranges of the OPM's parameters (k per item or category, containment c).
+#: The source's grid spans k 0.0-2.0 and c 1.0-2.0; the bounds keep every cost finite
+#: for coordinates up to MAX_COORDINATE_M.
+K_RANGE = (0.0, 10.0)
+C_RANGE = (0.0, 1000.0)  # exclusive at 0: c scales the cost
+MAX_COORDINATE_M = 1e6
 
 
 class StrategyError(ValueError):
@@ -24,7 +35,65 @@ class StrategyError(ValueError):
 
 
 def as_generator(rng: np.random.Generator | int | None) -> np.random.Generator:
+    import numpy as np
+
     return rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+
+
+def parameter_problem(name: str, value: Any) -> str | None:
+    """Why `value` is not acceptable for the OPM parameter `name` (a k or c), else None."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return f"expected a number, got {value!r}"
+    try:
+        number = float(value)
+    except OverflowError:
+        return f"expected a number of ordinary size, got one with {len(str(value))} digits"
+    is_c = name == "c" or name.endswith(".c")
+    low, high = C_RANGE if is_c else K_RANGE
+    if not math.isfinite(number) or number > high or number < low or (is_c and number == low):
+        interval = f"in ({low:g}, {high:g}]" if is_c else f"in [{low:g}, {high:g}]"
+        return f"expected a finite number {interval}, got {value!r}"
+    return None
+
+
+def check_params(params: OPMParams) -> None:
+    """Raise StrategyError if a parameter is out of range (negative k, c <= 0, NaN...)."""
+    for name in OPMParams.names():
+        problem = parameter_problem(name, getattr(params, name))
+        if problem:
+            raise StrategyError(f"parameter {name}: {problem}")
+
+
+def strategy_label(strategy: Strategy) -> str:
+    """How to name a strategy in an error: its registered name and its class."""
+    cls = type(strategy)
+    return f"{cls.name!r} ({cls.__module__}.{cls.__qualname__})"
+
+
+def checked_choice(strategy: Strategy, remaining: Sequence[Candidate],
+                   agent: Sequence[float]) -> Candidate:
+    """`strategy.choose(remaining, agent)`, checked: the one place where a misbehaving
+    strategy (a plugin that raises, returns None or something that is not one of the
+    remaining candidates) becomes a StrategyError naming it. A StrategyError the
+    strategy raises itself (e.g. too many items for `optimal`) passes unchanged."""
+    try:
+        choice = strategy.choose(remaining, agent)
+    except StrategyError:
+        raise
+    except Exception as exc:
+        raise StrategyError(f"strategy {strategy_label(strategy)} raised "
+                            f"{type(exc).__name__}: {exc}") from exc
+    for candidate in remaining:
+        if candidate is choice:
+            return candidate
+    for candidate in remaining:  # an equal copy is fine too
+        if isinstance(choice, Candidate) and candidate == choice:
+            return candidate
+    shown = repr(choice)
+    shown = shown if len(shown) <= 80 else shown[:77] + "..."
+    raise StrategyError(f"strategy {strategy_label(strategy)} returned {shown} "
+                        f"({type(choice).__name__}); expected one of the {len(remaining)} "
+                        "remaining candidates")
 
 
 class Strategy(ABC):
@@ -46,16 +115,30 @@ class Strategy(ABC):
         except KeyError as exc:
             raise StrategyError(f"unknown parameter {exc.args[0]!r}; expected some of "
                                 f"{', '.join(OPMParams.names())}") from None
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise StrategyError(f"parameters: expected numbers ({exc})") from None
+        check_params(self.params)
         self._span_weights = axis_weights == "span"
         weights = None if isinstance(axis_weights, str) else axis_weights
         try:
             self.model = CostModel(dims=dims, form=form, axis_weights=weights)
         except ValueError as exc:
             raise StrategyError(str(exc)) from None
-        self.rng = as_generator(rng)
+        self._rng = rng
         self.options = options
         #: How many choices were made at random among more than one option.
         self.random_picks = 0
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The strategy's generator, made from the seed it was given on first use."""
+        if not hasattr(self._rng, "integers"):  # a seed (None, int, list), not a Generator
+            self._rng = as_generator(self._rng)
+        return self._rng  # type: ignore[return-value]
+
+    @rng.setter
+    def rng(self, value: np.random.Generator | int | None) -> None:
+        self._rng = value
 
     # -- episode lifecycle ---------------------------------------------------------------
     def reset(self, candidates: Sequence[Candidate] = (),

@@ -17,8 +17,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:  # numpy is imported where it is used: a few-item decision needs none
+    import numpy as np
 
 DIMS: dict[str, tuple[int, ...]] = {
     "x": (0,), "y": (1,), "z": (2,), "xy": (0, 1), "xz": (0, 2), "yz": (1, 2),
@@ -29,6 +31,8 @@ FORMS = ("power", "additive", "product")
 
 def span_weights(points: Sequence[Sequence[float]]) -> tuple[float, float, float]:
     """Axis weights from the spans of the given points (Eq. 3.5): w_a = span_a / sum."""
+    import numpy as np
+
     arr = np.asarray(points, dtype=float).reshape(-1, 3)
     spans = arr.max(axis=0) - arr.min(axis=0)
     total = float(spans.sum())
@@ -70,6 +74,8 @@ class CostModel:
     def costs(self, p: Sequence[float], q: np.ndarray, k: np.ndarray | float,
               c: np.ndarray | float) -> np.ndarray:
         """Costs from one point p to many points q (N x 3), vectorised."""
+        import numpy as np
+
         idx = list(DIMS[self.dims])
         diff = np.asarray(q, dtype=float)[:, idx] - np.asarray(p, dtype=float)[idx]
         sq = diff * diff

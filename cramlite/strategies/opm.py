@@ -9,12 +9,14 @@ the first one is taken (its `fetch_at`, by default its position).
 from __future__ import annotations
 
 from collections.abc import Sequence
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from cramlite.strategies.base import Strategy
 from cramlite.strategies.candidates import Candidate
 from cramlite.strategies.history import TakenHistory
+
+if TYPE_CHECKING:  # numpy only where the vectorised paths use it (fast start-up)
+    import numpy as np
 
 #: Above this many candidates the numpy path is faster than plain Python.
 VECTOR_THRESHOLD = 48
@@ -30,6 +32,8 @@ class OPMStrategy(Strategy):
     def costs(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> list[float]:
         self._ensure_weights(remaining, agent)
         if len(remaining) > VECTOR_THRESHOLD:
+            import numpy as np
+
             kc = np.array([self.kc(c) for c in remaining], dtype=float)
             positions = np.array([c.position for c in remaining], dtype=float)
             return self.model.costs(agent, positions, kc[:, 0], kc[:, 1]).tolist()
@@ -51,6 +55,8 @@ class OPMStrategy(Strategy):
     def choose_index(self, agent: Sequence[float], positions: np.ndarray,
                      k: np.ndarray | float, c: np.ndarray | float) -> int:
         """Vectorised decision over arrays (N x 3 positions): the index of the next item."""
+        import numpy as np
+
         values = self.model.costs(agent, positions, k, c)
         ties = np.flatnonzero(values == values.min())
         return int(ties[0] if len(ties) == 1 else ties[self.rng.integers(len(ties))])

@@ -17,12 +17,14 @@ matter, and the first item minimises C(agent, j) - C(T, j).
 from __future__ import annotations
 
 from collections.abc import Sequence
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from cramlite.strategies.base import StrategyError
 from cramlite.strategies.candidates import Candidate
 from cramlite.strategies.opm import OPMStrategy
+
+if TYPE_CHECKING:  # numpy is imported where it is used (`strategies` starts fast)
+    import numpy as np
 
 MAX_OPTIMAL_ITEMS = 15
 #: Totals within this relative distance of the least are ties (sums of the same costs in
@@ -34,6 +36,8 @@ def completion_costs(step: np.ndarray) -> np.ndarray:
     """rest[mask, i]: least cost of fetching every item in `mask` (a bit set over n items),
     starting from where the agent stands after item i (i not in mask); `step[i, j]` is the
     cost of fetching j after i. Held-Karp backwards, one layer of subset sizes at a time."""
+    import numpy as np
+
     n = step.shape[0]
     full = 1 << n
     rest = np.full((full, n), np.inf)
@@ -58,6 +62,8 @@ class OptimalStrategy(OPMStrategy):
     def first_costs(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> np.ndarray:
         """For each item, the least total cost of an order that starts with it, up to a
         constant shared by all items (what decides the first item)."""
+        import numpy as np
+
         n = len(remaining)
         self._ensure_weights(remaining, agent)
         kc = np.array([self.kc(c) for c in remaining], dtype=float).reshape(-1, 2)

@@ -5,12 +5,15 @@ Third-party packages register a `Strategy` subclass under the entry-point group
 
     [project.entry-points."cramlite.strategies"]
     my-order = "my_package.order:MyStrategy"
+
+Built-in and entry-point names are *registered*: anyone may name them, including an
+ordering request from another process. A `package.module:Class` path imports code, so
+only a command-line option may use it (`registered_only=True` refuses it).
 """
 
 from __future__ import annotations
 
 import importlib
-from importlib.metadata import entry_points
 from typing import Any
 
 from cramlite.errors import UserInputError
@@ -26,6 +29,8 @@ BUILTIN: dict[str, type[Strategy]] = {cls.name: cls for cls in (
 
 
 def plugin_entry_points() -> dict[str, Any]:
+    from importlib.metadata import entry_points  # ~15 ms: only when a plugin is looked up
+
     return {ep.name: ep for ep in entry_points(group=ENTRY_POINT_GROUP)}
 
 
@@ -33,7 +38,7 @@ LEARNED_PREFIX = "learned:"
 
 
 def available_strategies() -> dict[str, str]:
-    """Name -> one-line summary of every strategy that can be named (built-in or plugin)."""
+    """Name -> one-line summary of every registered strategy (built-in or plugin)."""
     out = {name: cls.summary for name, cls in BUILTIN.items()}
     out[f"{LEARNED_PREFIX}MODEL"] = "a model file written by `cramlite train` (RNN, NN, CPT)"
     for name, ep in plugin_entry_points().items():
@@ -41,8 +46,9 @@ def available_strategies() -> dict[str, str]:
     return out
 
 
-def strategy_class(name: str) -> type[Strategy]:
-    """Resolve a strategy name, an entry-point name, or `package.module:Class`."""
+def strategy_class(name: str, *, registered_only: bool = False) -> type[Strategy]:
+    """Resolve a strategy name, an entry-point name, or (unless `registered_only`)
+    `package.module:Class`."""
     if name in BUILTIN:
         return BUILTIN[name]
     if name.startswith(LEARNED_PREFIX):  # a trained model; numpy (and cpt) only when used
@@ -56,19 +62,35 @@ def strategy_class(name: str) -> type[Strategy]:
     try:
         if name in plugins:
             cls = plugins[name].load()
-        elif ":" in name:
+        elif ":" in name and not registered_only:
             module_name, _, attr = name.partition(":")
             cls = getattr(importlib.import_module(module_name), attr)
+        elif ":" in name:
+            raise StrategyError(f"{name!r} is not a registered strategy; a request may name "
+                                f"only {', '.join(available_strategies())} (a module:Class "
+                                "path is a command-line option, e.g. cramlite order "
+                                "--strategy)")
         else:
             raise StrategyError(f"unknown strategy {name!r}; expected one of "
                                 f"{', '.join(available_strategies())} or package.module:Class")
-    except (ImportError, AttributeError) as exc:
-        raise StrategyError(f"cannot load strategy {name!r}: {exc}") from None
+    except StrategyError:
+        raise
+    except Exception as exc:  # ImportError, AttributeError, or anything a plugin's import raises
+        raise StrategyError(f"cannot load strategy {name!r}: {type(exc).__name__}: {exc}") \
+            from None
     if not (isinstance(cls, type) and issubclass(cls, Strategy)):
         raise StrategyError(f"strategy {name!r} is not a cramlite.strategies.Strategy subclass")
     return cls
 
 
-def make_strategy(name: str, **kwargs: Any) -> Strategy:
-    """A fresh strategy instance (one per episode or trial)."""
-    return strategy_class(name)(**kwargs)
+def make_strategy(name: str, *, registered_only: bool = False, **kwargs: Any) -> Strategy:
+    """A fresh strategy instance (one per episode or trial). A plugin whose constructor
+    fails is reported as a StrategyError naming it."""
+    cls = strategy_class(name, registered_only=registered_only)
+    try:
+        return cls(**kwargs)
+    except StrategyError:
+        raise
+    except Exception as exc:
+        raise StrategyError(f"strategy {name!r} ({cls.__module__}.{cls.__qualname__}) could "
+                            f"not be created: {type(exc).__name__}: {exc}") from exc

@@ -2,13 +2,19 @@
 
 A setup is YAML (see worlds/setups/v1.yaml, commented); this module parses and
 validates it without touching PyBullet, so that every mistake is reported with the
-file, the field and what was expected. Geometry checks (an item inside another body,
-an item off its surface) happen when a `World` loads the setup.
+file, the field and what was expected: unknown keys, numbers that are not finite or
+ordinary-sized, names that could not be part of a file name, item URDFs that are not
+well-formed or have non-positive sizes. Geometry checks (an item inside another body or
+off its surface, a target in the air, two targets on one spot, the robot outside the
+kitchen or inside furniture) happen when a `World` loads the setup.
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
+import re
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -25,6 +31,17 @@ SETUP_FORMAT = 1
 ITEM_KEYS = {"name", "type", "pose", "surface", "in", "contained", "category", "target",
              "aliases"}
 TOP_KEYS = {"format", "name", "description", "world", "robot", "items", "baseline_order"}
+ROBOT_KEYS = {"start"}
+#: Setup and item names end up in file names and in space-separated CSV columns.
+NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]{0,63}")
+NAME_RULE = ("1-64 letters, digits, '_', '.', '+' or '-', starting with a letter or digit "
+             "(names become file names)")
+MAX_SETUP_BYTES = 1024 * 1024
+MAX_URDF_BYTES = 4 * 1024 * 1024
+MAX_ITEMS = 100
+#: Poses are metres in a room-sized world, yaw in radians.
+MAX_ABS_POSITION_M = 1000.0
+MAX_ABS_YAW = 2 * math.pi + 1e-6
 
 
 def builtin_setup_names() -> list[str]:
@@ -80,6 +97,9 @@ class Setup:
     baseline_order: tuple[str, ...]
     description: str = ""
     raw: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    #: SHA-256 (hex, 16 characters) of the setup file and every URDF it uses: two setups
+    #: with the same hash give the same trials.
+    content_hash: str = ""
 
     def item(self, name: str) -> ItemSpec:
         for spec in self.items:
@@ -108,16 +128,38 @@ def load_setup(setup: str | Path) -> Setup:
     path = resolve_setup_path(setup)
     src = str(path)
     try:
-        data = yaml.safe_load(path.read_text())
+        if not path.is_file():
+            raise SetupError("not a file; expected a setup YAML file", source=src)
+        if path.stat().st_size > MAX_SETUP_BYTES:
+            raise SetupError(f"larger than {MAX_SETUP_BYTES} bytes; expected a setup file",
+                             source=src)
+        content = path.read_bytes()
+        data = yaml.safe_load(content.decode("utf-8"))
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark is not None else None
         problem = getattr(exc, "problem", None) or "could not parse"
         raise SetupError(f"malformed YAML ({problem}); expected a YAML mapping",
                          source=src, field=where) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SetupError(f"cannot read file ({exc.__class__.__name__})", source=src) from None
-    return parse_setup(data, path)
+    except UnicodeDecodeError:
+        raise SetupError("not UTF-8 text; expected a setup YAML file", source=src) from None
+    except OSError as exc:
+        raise SetupError(f"cannot read file ({exc.strerror or exc.__class__.__name__})",
+                         source=src) from None
+    except (ValueError, RecursionError) as exc:  # e.g. an integer of 5,000 digits
+        raise SetupError(f"unusable YAML ({str(exc) or type(exc).__name__})",
+                         source=src) from None
+    setup = parse_setup(data, path)
+    digest = hashlib.sha256(content)
+    for urdf in (setup.world_urdf, *(item.urdf for item in setup.items)):
+        digest.update(urdf.read_bytes())
+    return _replace(setup, content_hash=digest.hexdigest()[:16])
+
+
+def _replace(setup: Setup, **changes: Any) -> Setup:
+    from dataclasses import replace
+
+    return replace(setup, **changes)
 
 
 def parse_setup(data: Any, path: Path) -> Setup:
@@ -136,8 +178,8 @@ def parse_setup(data: Any, path: Path) -> Setup:
     if fmt != SETUP_FORMAT:
         raise fail("format", f"expected {SETUP_FORMAT}, got {fmt!r}")
     name = data.get("name", path.stem)
-    if not isinstance(name, str) or not name:
-        raise fail("name", f"expected a non-empty string, got {name!r}")
+    if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name):
+        raise fail("name", f"expected {NAME_RULE}, got {_short(name)}")
 
     world = data.get("world")
     if not isinstance(world, str) or not world:
@@ -146,16 +188,25 @@ def parse_setup(data: Any, path: Path) -> Setup:
     world_urdf = _resolve_urdf(world, path, worlds_dir())
     if world_urdf is None:
         raise fail("world", f"expected worlds/{world}.urdf or a URDF path; found neither")
+    problem = urdf_problem(world_urdf)
+    if problem:
+        raise fail("world", f"{world_urdf}: {problem}")
 
     robot = data.get("robot")
     if not isinstance(robot, dict) or "start" not in robot:
         raise fail("robot", "expected a mapping with 'start: [x, y, yaw]'")
+    unknown = set(robot) - ROBOT_KEYS
+    if unknown:
+        raise fail(f"robot.{sorted(map(str, unknown))[0]}",
+                   f"unknown key; expected only {sorted(ROBOT_KEYS)}")
     start = _numbers(robot["start"], 3, "robot.start", "[x, y, yaw]", fail)
     robot_start = RobotStart(*start)
 
     raw_items = data.get("items")
     if not isinstance(raw_items, list) or not raw_items:
         raise fail("items", "expected a non-empty list of items")
+    if len(raw_items) > MAX_ITEMS:
+        raise fail("items", f"{len(raw_items)} items; expected at most {MAX_ITEMS}")
     items = tuple(_parse_item(raw, i, path, fail) for i, raw in enumerate(raw_items))
     names = [it.name for it in items]
     for i, nm in enumerate(names):
@@ -187,16 +238,19 @@ def _parse_item(raw: Any, i: int, path: Path, fail) -> ItemSpec:
         raise fail(f"{where}.surface", "expected either 'surface: <link it stands on>' or "
                                        "'in: <container>', not both or neither")
     name = raw["name"]
-    if not isinstance(name, str) or not name:
-        raise fail(f"{where}.name", f"expected a non-empty string, got {name!r}")
+    if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name):
+        raise fail(f"{where}.name", f"expected {NAME_RULE}, got {_short(name)}")
     item_type = raw.get("type", name)
-    if not isinstance(item_type, str):
-        raise fail(f"{where}.type", f"expected a string, got {item_type!r}")
+    if not isinstance(item_type, str) or not item_type:
+        raise fail(f"{where}.type", f"expected a string, got {_short(item_type)}")
     urdf = _resolve_urdf(item_type, path, worlds_dir() / "items")
     if urdf is None:
         known = sorted(p.stem for p in (worlds_dir() / "items").glob("*.urdf"))
-        raise fail(f"{where}.type", f"unknown item type {item_type!r}; expected one of {known} "
-                                    "or a path to a URDF")
+        raise fail(f"{where}.type", f"unknown item type {_short(item_type)}; expected one of "
+                                    f"{known} or a path to a URDF")
+    problem = urdf_problem(urdf)
+    if problem:
+        raise fail(f"{where}.type", f"{urdf}: {problem}")
     pose = Pose(*_numbers(raw["pose"], 4, f"{where}.pose", "[x, y, z, yaw]", fail))
     target = Pose(*_numbers(raw["target"], 4, f"{where}.target", "[x, y, z, yaw]", fail))
     container = raw.get("in")
@@ -226,17 +280,95 @@ def _parse_item(raw: Any, i: int, path: Path, fail) -> ItemSpec:
                     aliases=tuple(aliases), container=container)
 
 
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def _numbers(value: Any, n: int, fld: str, shape: str, fail) -> tuple[float, ...]:
+    """n finite numbers of ordinary size: positions within +-MAX_ABS_POSITION_M, a yaw
+    (the last of a pose) within +-2 pi."""
     if not isinstance(value, list | tuple):
-        raise fail(fld, f"expected {n} numbers {shape}, got {value!r}")
+        raise fail(fld, f"expected {n} numbers {shape}, got {_short(value)}")
     if len(value) != n:
         raise fail(fld, f"expected {n} numbers {shape}, got {len(value)}")
     out = []
-    for v in value:
-        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-            raise fail(fld, f"expected {n} finite numbers {shape}, got {value!r}")
+    for i, v in enumerate(value):
+        limit = MAX_ABS_YAW if i == n - 1 and shape.endswith("yaw]") else MAX_ABS_POSITION_M
+        ok = not isinstance(v, bool) and isinstance(v, int | float) and abs(v) <= limit
+        if not ok:  # also NaN (abs(nan) <= limit is False) and integers of any size
+            unit = "radians within +-2 pi" if limit == MAX_ABS_YAW else \
+                f"metres within +-{MAX_ABS_POSITION_M:g}"
+            shown = f"an integer with {len(str(abs(v)))} digits" if isinstance(v, int) \
+                and not isinstance(v, bool) and abs(v) > 10**15 else _short(v)
+            raise fail(fld, f"expected {n} numbers {shape}; value {i + 1} must be finite "
+                            f"({unit}), got {shown}")
         out.append(float(v))
     return tuple(out)
+
+
+def _positive_numbers(text: str | None, n: int) -> bool:
+    try:
+        values = [float(v) for v in (text or "").split()]
+    except ValueError:
+        return False
+    return len(values) == n and all(math.isfinite(v) and v > 0 for v in values)
+
+
+def _finite_numbers(text: str | None, n: int) -> bool:
+    try:
+        values = [float(v) for v in (text or "").split()]
+    except ValueError:
+        return False
+    return len(values) == n and all(math.isfinite(v) for v in values)
+
+
+def urdf_problem(path: Path) -> str | None:
+    """Why a URDF file could not be loaded as an item or world, else None: not a
+    well-formed <robot> with links, or a geometry with a size that is not positive, an
+    origin that is not finite, a negative mass, a missing mesh file. (PyBullet loads a
+    box of negative size without complaint and then misbehaves.)"""
+    try:
+        if path.stat().st_size > MAX_URDF_BYTES:
+            return f"larger than {MAX_URDF_BYTES} bytes"
+        root = ET.parse(path).getroot()
+    except ET.ParseError as exc:
+        return f"not well-formed XML ({exc}); expected a URDF"
+    except OSError as exc:
+        return f"cannot read it ({exc.strerror or type(exc).__name__})"
+    if root.tag != "robot" or root.find("link") is None:
+        return "expected a URDF: a <robot> element with at least one <link>"
+    for link in root.iter("link"):
+        label = f"link {link.get('name')!r}"
+        for geometry in link.iter("geometry"):
+            for shape in geometry:
+                if shape.tag == "box" and not _positive_numbers(shape.get("size"), 3):
+                    return f"{label}: box size {shape.get('size')!r}; expected 3 positive numbers"
+                if shape.tag == "cylinder" and not (
+                        _positive_numbers(shape.get("radius"), 1)
+                        and _positive_numbers(shape.get("length"), 1)):
+                    return (f"{label}: cylinder radius {shape.get('radius')!r} length "
+                            f"{shape.get('length')!r}; expected positive numbers")
+                if shape.tag == "sphere" and not _positive_numbers(shape.get("radius"), 1):
+                    return (f"{label}: sphere radius {shape.get('radius')!r}; expected a "
+                            "positive number")
+                if shape.tag == "mesh":
+                    filename = shape.get("filename") or ""
+                    if not filename.startswith("package://") and not (
+                            (path.parent / filename).is_file()):
+                        return f"{label}: mesh file {filename!r} not found"
+        for origin in link.iter("origin"):
+            for attr in ("xyz", "rpy"):
+                if origin.get(attr) is not None and not _finite_numbers(origin.get(attr), 3):
+                    return f"{label}: origin {attr} {origin.get(attr)!r}; expected 3 numbers"
+        for mass in link.iter("mass"):
+            try:
+                value = float(mass.get("value", ""))
+            except ValueError:
+                value = math.nan
+            if not (math.isfinite(value) and value >= 0):
+                return f"{label}: mass {mass.get('value')!r}; expected a number >= 0"
+    return None
 
 
 def _resolve_urdf(name: str, setup_path: Path, folder: Path) -> Path | None:

@@ -29,6 +29,8 @@ GRAVITY = -9.81
 PENETRATION_TOLERANCE_M = 0.005
 #: An item must start within this height of its surface's top.
 SURFACE_HEIGHT_TOLERANCE_M = 0.01
+#: The link of a world URDF the robot stands on (not a surface for items).
+FLOOR_LINK = "floor"
 
 
 @dataclass(frozen=True)
@@ -112,8 +114,12 @@ class World:
         self.load_environment(setup.world_urdf)
         self.load_robot()
         self.robot.set_base_pose(setup.robot_start.x, setup.robot_start.y, setup.robot_start.yaw)
-        for spec in setup.items:
-            obj = self.add_object(spec.name, spec.type, spec.urdf)
+        for i, spec in enumerate(setup.items):
+            try:
+                obj = self.add_object(spec.name, spec.type, spec.urdf)
+            except SetupError as exc:
+                raise SetupError(f"{spec.urdf}: {exc.detail}", source=str(setup.source),
+                                 field=f"items[{i}].type") from None
             obj.spec = spec
             obj.set_pose(spec.pose.xyz, yaw_quat(spec.pose.yaw))
         self.check_setup_geometry(setup)
@@ -328,25 +334,38 @@ class World:
                 source=src, field=f"{where}.pose")
 
     def check_setup_geometry(self, setup: Setup) -> None:
-        """Every item stands on its surface and starts inside nothing else."""
+        """Refuse a scene a trial could not start from: every item stands on its surface
+        and starts inside nothing else; every target rests on the top of a surface, free
+        of the furniture and of the other targets; the robot (arms parked) stands on the
+        kitchen floor, inside no furniture and no item."""
         src = str(setup.source)
-        surfaces = [n for n in self.environment_links if n != "floor"]
+
+        def fail(fld: str, message: str) -> SetupError:
+            return SetupError(message, source=src, field=fld)
+
+        surfaces = [n for n in self.environment_links if n != FLOOR_LINK]
         for i, spec in enumerate(setup.items):
             where = f"items[{i}]"
             if spec.container is not None:
                 self._check_in_container(spec, src, where)
                 continue
             if spec.surface not in self.environment_links:
-                raise SetupError(f"unknown surface {spec.surface!r}; expected one of "
-                                 f"{', '.join(surfaces)}", source=src, field=f"{where}.surface")
+                raise fail(f"{where}.surface", f"unknown surface {spec.surface!r}; expected "
+                                               f"one of {', '.join(surfaces)}")
             surf = self.surface(spec.surface)
             if (not surf.contains_xy(spec.pose.x, spec.pose.y)
                     or abs(spec.pose.z - surf.top_z) > SURFACE_HEIGHT_TOLERANCE_M):
-                raise SetupError(
-                    f"item {spec.name!r} at {list(spec.pose.xyz)} is not on {spec.surface!r}; "
-                    f"expected x in [{surf.x_min:.2f}, {surf.x_max:.2f}], y in "
-                    f"[{surf.y_min:.2f}, {surf.y_max:.2f}], z = {surf.top_z:.2f}",
-                    source=src, field=f"{where}.pose")
+                raise fail(f"{where}.pose",
+                           f"item {spec.name!r} at {list(spec.pose.xyz)} is not on "
+                           f"{spec.surface!r}; expected x in [{surf.x_min:.2f}, "
+                           f"{surf.x_max:.2f}], y in [{surf.y_min:.2f}, {surf.y_max:.2f}], "
+                           f"z = {surf.top_z:.2f}")
+            if self._surface_under(spec.target) is None:
+                raise fail(f"{where}.target",
+                           f"target of {spec.name!r} at {list(spec.target.xyz)} rests on no "
+                           f"surface (in the air, off the edge or below the floor); expected "
+                           f"z = the top of one of {', '.join(surfaces)} under it")
+        self._check_robot_start(setup, fail)
         p.performCollisionDetection(physicsClientId=self.client)
         bodies = [self.environment, self.robot.body, *(o.body for o in self.objects.values())]
         for i, spec in enumerate(setup.items):
@@ -356,10 +375,87 @@ class World:
                     continue
                 depth = self.penetration(obj.body, other)
                 if depth > PENETRATION_TOLERANCE_M:
-                    raise SetupError(
-                        f"item {spec.name!r} starts inside {self.body_name(other)} "
-                        f"(overlap {depth * 100:.1f} cm); expected a free spot",
-                        source=src, field=f"items[{i}].pose")
+                    raise fail(f"items[{i}].pose",
+                               f"item {spec.name!r} starts inside {self.body_name(other)} "
+                               f"(overlap {depth * 100:.1f} cm); expected a free spot")
+        self._check_targets(setup, fail)
+
+    def _surface_under(self, pose: Any) -> Surface | None:
+        """The surface (not the floor) whose top the pose rests on, if any."""
+        for name in self.environment_links:
+            if name == FLOOR_LINK:
+                continue
+            surf = self.surface(name)
+            if surf.contains_xy(pose.x, pose.y) and \
+                    abs(pose.z - surf.top_z) <= SURFACE_HEIGHT_TOLERANCE_M:
+                return surf
+        return None
+
+    def _check_robot_start(self, setup: Setup, fail) -> None:
+        from cramlite.world.pr2 import PARK_JOINTS
+
+        start = setup.robot_start
+        saved = self.robot.joint_positions()
+        self.robot.set_joint_positions({k: v for arm in PARK_JOINTS.values()
+                                        for k, v in arm.items()})
+        try:
+            lo, hi = p.getAABB(self.robot.body, -1, physicsClientId=self.client)
+            for j in range(p.getNumJoints(self.robot.body, physicsClientId=self.client)):
+                a, b = p.getAABB(self.robot.body, j, physicsClientId=self.client)
+                lo = [min(x, y) for x, y in zip(lo, a, strict=True)]
+                hi = [max(x, y) for x, y in zip(hi, b, strict=True)]
+            if FLOOR_LINK in self.environment_links:
+                floor = self.surface(FLOOR_LINK)
+                if not (floor.contains_xy(lo[0], lo[1]) and floor.contains_xy(hi[0], hi[1])):
+                    raise fail("robot.start",
+                               f"the robot at ({start.x:g}, {start.y:g}) is not on the floor "
+                               f"of the kitchen; expected x in [{floor.x_min:.2f}, "
+                               f"{floor.x_max:.2f}], y in [{floor.y_min:.2f}, "
+                               f"{floor.y_max:.2f}] with room for the robot")
+            p.performCollisionDetection(physicsClientId=self.client)
+            for name, index in self.environment_links.items():
+                if name == FLOOR_LINK:
+                    continue
+                depth = self.penetration(self.robot.body, self.environment, index)
+                if depth > PENETRATION_TOLERANCE_M:
+                    raise fail("robot.start",
+                               f"the robot at ({start.x:g}, {start.y:g}) starts inside "
+                               f"{name!r} (overlap {depth * 100:.1f} cm); expected a free "
+                               "spot on the floor")
+            for i, spec in enumerate(setup.items):
+                depth = self.penetration(self.robot.body, self.objects[spec.name].body)
+                if depth > PENETRATION_TOLERANCE_M:
+                    raise fail("robot.start",
+                               f"the robot at ({start.x:g}, {start.y:g}) starts inside item "
+                               f"{spec.name!r} (items[{i}]); expected a free spot")
+        finally:
+            self.robot.set_joint_positions(saved)
+
+    def _check_targets(self, setup: Setup, fail) -> None:
+        """Put every item at its target, check the targets are free, put them back."""
+        saved = {name: obj.pose() for name, obj in self.objects.items()}
+        try:
+            for spec in setup.items:
+                self.objects[spec.name].set_pose(spec.target.xyz, yaw_quat(spec.target.yaw))
+            p.performCollisionDetection(physicsClientId=self.client)
+            for i, spec in enumerate(setup.items):
+                body = self.objects[spec.name].body
+                depth = self.penetration(body, self.environment)
+                if depth > PENETRATION_TOLERANCE_M:
+                    raise fail(f"items[{i}].target",
+                               f"target of {spec.name!r} at {list(spec.target.xyz)} is inside "
+                               f"the furniture (overlap {depth * 100:.1f} cm); expected a "
+                               "free spot on a surface")
+                for j, other in enumerate(setup.items[:i]):
+                    depth = self.penetration(body, self.objects[other.name].body)
+                    if depth > PENETRATION_TOLERANCE_M:
+                        raise fail(f"items[{i}].target",
+                                   f"target of {spec.name!r} overlaps the target of "
+                                   f"{other.name!r} (items[{j}]) by {depth * 100:.1f} cm; "
+                                   "expected a spot of its own")
+        finally:
+            for name, (pos, orn) in saved.items():
+                self.objects[name].set_pose(pos, orn)
 
     # -- simulation -----------------------------------------------------------------
     def step(self, seconds: float) -> None:
