@@ -82,7 +82,6 @@ class ParkArmsAction:
             now = ctx.modules.joint_positions(list(target))
             if any(abs(wrap_angle(now[n] - v)) > PARKED_TOLERANCE_RAD for n, v in target.items()):
                 MoveArmJointsMotion(dict(target)).perform(ctx)
-        update_carried(ctx)
 
 
 @dataclass
@@ -102,7 +101,7 @@ class NavigateAction:
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
-        update_carried(ctx)
+        ctx.base_checker()  # up to date with what sticks out of the base
         start = ctx.modules.base_pose()
         path = ctx.base_planner.plan(start, self.target, ctx.rng)
         if path is None:
@@ -430,7 +429,7 @@ class TransportAction:
                 del ctx.holding[arm]
                 ctx.modules.settle(ctx.options.settle_s, [obj.name])
                 ctx.note(f"let go of {obj.name}")
-        update_carried(ctx)
+        ctx.footprint_stale = True
 
 
 def _closed_now(ctx: RobotContext, close, container) -> bool:
@@ -470,10 +469,10 @@ def footprint_outline(points_xy: np.ndarray, spacing: float) -> np.ndarray:
 
 def update_carried(ctx: RobotContext) -> None:
     """Tell the base planner what sticks out of the base while it drives: every carried
-    object (its box seen from above) and every link of an arm holding something that
-    reaches beyond the base square (from its collision mesh), each as an outline in the
-    robot's frame checked against the furniture that rises above the lowest point that
-    sticks out."""
+    object (its box seen from above) and every arm link that reaches beyond the base
+    square (from its collision mesh; a parked PR2's elbows stick out 0.43 m to the sides),
+    each as an outline in the robot's frame checked against the furniture that rises above
+    the lowest point that sticks out."""
     x, y, yaw = ctx.modules.base_pose()
     c, s = math.cos(yaw), math.sin(yaw)
     groups: dict[float, list[np.ndarray]] = {}
@@ -487,11 +486,12 @@ def update_carried(ctx: RobotContext) -> None:
         dx, dy = corners[:, 0] - x, corners[:, 1] - y
         robot_frame = np.column_stack([c * dx + s * dy, -s * dx + c * dy, corners[:, 2]])
         _stick_out(robot_frame, ctx.checker.half_size_m, groups)
-    for bucket, points in _upper_body_outline(ctx, set(ctx.holding)).items():
+    for bucket, points in _upper_body_outline(ctx, set(ARMS)).items():
         groups.setdefault(bucket, []).append(points)
     ctx.checker.set_carried([(np.vstack(points), carried_map(ctx.world, bucket))
                              for bucket, points in sorted(groups.items())],
                             _exact_upper_body(ctx) if groups else None)
+    ctx.footprint_stale = False
 
 
 def _exact_upper_body(ctx: RobotContext):
@@ -504,12 +504,13 @@ def _exact_upper_body(ctx: RobotContext):
     poses = {h.name: ctx.world.objects[h.name].pose() for h in held}
 
     def check(x: float, y: float, yaw: float) -> bool:
-        base = robot.base_pose()
+        base, now = robot.base_pose(), scene.current()
         robot.set_base_pose(x, y, yaw)
         try:
             return scene.is_free(q)
         finally:
             robot.set_base_pose(*base)
+            scene.set_state(now)
             for name, (pos, orn) in poses.items():
                 ctx.world.objects[name].set_pose(pos, orn)
 
@@ -530,9 +531,9 @@ def _stick_out(points: np.ndarray, square: float, groups: dict[float, list[np.nd
 
 
 def _upper_body_outline(ctx: RobotContext, arms: set[str]) -> dict[float, np.ndarray]:
-    """What of the links of `arms` (those holding something: a tucked arm stays over the
-    base) sticks out of the base in the current configuration (robot frame, by height);
-    computed once per configuration of the arm (and the torso) and world."""
+    """What of the links of `arms` sticks out of the base in the current configuration
+    (robot frame, by height); computed once per configuration of the arm (and the torso)
+    and world."""
     robot = ctx.world.robot
     joints = robot.joint_positions()
     parts = ctx.collisions.upper_body_parts()

@@ -267,7 +267,7 @@ def _handle_ik(arm: str, base: BasePose, torso: float, path: HandlePath,
 
 
 def _footprint_free(ctx: RobotContext, occupancy, base: BasePose) -> bool:
-    checker = ctx.checker
+    checker = ctx.base_checker()
     saved = checker.occupancy
     checker.occupancy = occupancy
     try:
@@ -447,10 +447,12 @@ def virtually_open(ctx: RobotContext, container: Container) -> Iterator[None]:
     with ctx.world.joint_at(container.joint, container.open_value):
         saved = ctx.checker.occupancy
         ctx.checker.occupancy = occupancy_map(ctx.world)
+        ctx.footprint_stale = True  # what sticks out, against the open container too
         try:
             yield
         finally:
             ctx.checker.occupancy = saved
+            ctx.footprint_stale = True
 
 
 def is_open(ctx: RobotContext, container: Container) -> bool:
