@@ -64,7 +64,7 @@ def test_open_and_close_each_container(c2_world, tmp_path: Path) -> None:
             value = world.world_joint_positions()[container.joint]
             print(name, "open at", value, "limits", lower, upper)
             assert value == pytest.approx(container.open_value, abs=1e-6)
-            assert container.open_value <= upper + 1e-9
+            assert (lower, container.open_value) == pytest.approx((0.0, upper))  # its limits
             if name == "drawer_1":  # the spoon inside rode along with the drawer
                 moved = np.subtract(world.objects["spoon"].position(), spoon_before)
                 assert moved == pytest.approx((-container.open_value, 0, 0), abs=1e-3)
