@@ -272,7 +272,7 @@ def test_the_base_check_counts_the_parked_arms_as_they_are_now() -> None:
         # the base clear of the door; the parked left gripper under it with the torso down,
         # 4 cm inside it with the torso up (replayed: this pose once went through it)
         near_door = (0.2518, 1.5291, -0.4359)
-        assert ctx.checker.occupancy.clearance_at(*near_door[:2]) > ctx.checker.half_size_m
+        assert ctx.checker.occupancy.clearance_bounds(*near_door[:2])[0] > ctx.checker.half_size_m
         assert ctx.base_checker().is_free(*near_door)
         MoveTorsoAction(0.25).perform(ctx)
         assert not ctx.base_checker().is_free(*near_door)

@@ -21,6 +21,8 @@ from cramlite.world.pr2 import PR2_BASE_HALF_SIZE_M
 
 #: Base poses whose answer a checker remembers at most (then it starts afresh).
 KNOWN_POSES = 200_000
+#: Side of the cells of the clearance grid, in map cells (bounds within 6 cm).
+COARSE_CELLS = 4
 #: Links lower than this are floor, not obstacles.
 FLOOR_HEIGHT_M = 0.03
 
@@ -65,29 +67,61 @@ class OccupancyMap:
         self.blocked = grid
 
     @functools.cached_property
-    def clearance(self) -> np.ndarray:
-        """Distance (m) from each cell to the nearest obstacle cell (before inflation);
-        computed when first asked for (maps for carried objects never need it)."""
-        return ndimage.distance_transform_edt(~self.obstacles) * self.resolution
+    def _coarse_clearance(self) -> np.ndarray:
+        """Distance (m) between the centres of coarse cells (COARSE_CELLS map cells a side)
+        and the nearest coarse cell holding an obstacle (before inflation): computed when
+        first asked for, on 1/16 of the cells (a map is made for every drawer position)."""
+        f = COARSE_CELLS
+        nx, ny = self.obstacles.shape
+        cx, cy = -(-nx // f), -(-ny // f)
+        padded = np.zeros((cx * f, cy * f), dtype=bool)
+        padded[:nx, :ny] = self.obstacles
+        coarse = padded.reshape(cx, f, cy, f).any(axis=(1, 3))
+        if not coarse.any():
+            return np.full(coarse.shape, np.inf)
+        return ndimage.distance_transform_edt(~coarse) * (f * self.resolution)
 
-    def clearance_at(self, x: float, y: float) -> float:
+    def near(self, reach: float) -> np.ndarray:
+        """Coarse cells from which an obstacle may be within `reach` (m)."""
+        slack = COARSE_CELLS * self.resolution * math.sqrt(2)
+        return self._coarse_clearance - slack <= reach
+
+    def coarse_cell(self, x: float, y: float) -> tuple[int, int]:
+        """The coarse cell of a point (-1, -1 outside the map)."""
         i, j = self._cell(x, y)
-        if 0 <= i < self.clearance.shape[0] and 0 <= j < self.clearance.shape[1]:
-            return float(self.clearance[i, j])
-        return 0.0
+        if not (0 <= i < self.obstacles.shape[0] and 0 <= j < self.obstacles.shape[1]):
+            return -1, -1
+        return i // COARSE_CELLS, j // COARSE_CELLS
+
+    def clearance_bounds(self, x: float, y: float) -> tuple[float, float]:
+        """Lower and upper bounds (m) of the distance from (x, y) to the nearest obstacle
+        (before inflation), within a coarse cell's diagonal; (0, 0) outside the map."""
+        i, j = self._cell(x, y)
+        if not (0 <= i < self.obstacles.shape[0] and 0 <= j < self.obstacles.shape[1]):
+            return 0.0, 0.0
+        f = COARSE_CELLS
+        distance = float(self._coarse_clearance[i // f, j // f])
+        slack = f * self.resolution * math.sqrt(2)
+        return max(0.0, distance - slack), distance + slack
 
     def _cell(self, x: float, y: float) -> tuple[int, int]:
         return (int(round((x - self.bounds.x_min) / self.resolution)),
                 int(round((y - self.bounds.y_min) / self.resolution)))
 
+    @functools.cached_property
+    def _bordered(self) -> np.ndarray:
+        """The blocked grid with a blocked border: points outside the map land on it."""
+        out = np.ones((self.blocked.shape[0] + 2, self.blocked.shape[1] + 2), dtype=bool)
+        out[1:-1, 1:-1] = self.blocked
+        return out
+
     def blocked_at(self, xy: np.ndarray) -> np.ndarray:
         """True for points (N x 2) on blocked cells or outside the map."""
-        idx = np.rint((xy - (self.bounds.x_min, self.bounds.y_min)) / self.resolution).astype(int)
-        inside = ((idx[:, 0] >= 0) & (idx[:, 0] < self.blocked.shape[0])
-                  & (idx[:, 1] >= 0) & (idx[:, 1] < self.blocked.shape[1]))
-        out = np.ones(len(xy), dtype=bool)
-        out[inside] = self.blocked[idx[inside, 0], idx[inside, 1]]
-        return out
+        grid = self._bordered
+        idx = np.rint((xy - (self.bounds.x_min, self.bounds.y_min)) / self.resolution)
+        i = np.clip(idx[:, 0], -1, grid.shape[0] - 2).astype(np.intp) + 1
+        j = np.clip(idx[:, 1], -1, grid.shape[1] - 2).astype(np.intp) + 1
+        return grid[i, j]
 
 
 def square_outline(half_size: float, spacing: float) -> np.ndarray:
@@ -99,6 +133,13 @@ def square_outline(half_size: float, spacing: float) -> np.ndarray:
     return np.vstack(edges)
 
 
+def square_grid(half_size: float, spacing: float) -> np.ndarray:
+    """Points filling a square centred at the origin, `spacing` apart (robot frame)."""
+    n = max(2, math.ceil(2 * half_size / spacing) + 1)
+    t = np.linspace(-half_size, half_size, n)
+    return np.stack(np.meshgrid(t, t), axis=-1).reshape(-1, 2)
+
+
 class FootprintChecker:
     """Is the robot (square base, and whatever sticks out of it: carried objects, arm
     links) clear of the fixed world at (x, y, yaw)? What sticks out is checked against
@@ -108,9 +149,13 @@ class FootprintChecker:
     def __init__(self, occupancy: OccupancyMap, half_size_m: float = PR2_BASE_HALF_SIZE_M,
                  outline_spacing_m: float = 0.04):
         self.occupancy = occupancy
-        self.outline = square_outline(half_size_m, outline_spacing_m)
+        # the base's edge and inside (something small may stand under the base's middle)
+        self.outline = np.vstack([square_outline(half_size_m, outline_spacing_m),
+                                  square_grid(half_size_m, outline_spacing_m)])
         self.half_size_m = half_size_m
-        self.carried_groups: list[tuple[np.ndarray, OccupancyMap, float]] = []
+        #: (robot-frame points, the map they are checked against, the coarse cells of that
+        #: map from which an obstacle may be within their reach)
+        self.carried_groups: list[tuple[np.ndarray, OccupancyMap, np.ndarray]] = []
         #: An exact check of what sticks out (robot links, carried objects) at a base pose,
         #: consulted where the 2D outlines say blocked (see `set_carried`).
         self.exact: Callable[[float, float, float], bool] | None = None
@@ -119,6 +164,7 @@ class FootprintChecker:
         pad = occupancy.margin + occupancy.resolution
         self._sure_free = half_size_m * math.sqrt(2) + pad  # circumscribed circle clear
         self._sure_blocked = half_size_m - pad  # something inside the inscribed circle
+        # (bounds of the clearance come from a coarse grid: see `clearance_bounds`)
 
     def set_carried(self, groups: Sequence[tuple[Sequence[Sequence[float]],
                                                   OccupancyMap | None]],
@@ -133,9 +179,10 @@ class FootprintChecker:
         self.carried_groups = []
         for points, occupancy in groups:
             pts = np.asarray(points, dtype=float).reshape(-1, 2)
-            if len(pts):  # (points, map, how far they reach from the base's centre)
-                self.carried_groups.append((pts, occupancy or self.occupancy,
-                                            float(np.hypot(*pts.T).max()) + pad))
+            if len(pts):  # (how far they reach from the base's centre, with the margin)
+                occupancy = occupancy or self.occupancy
+                reach = float(np.hypot(*pts.T).max()) + pad
+                self.carried_groups.append((pts, occupancy, occupancy.near(reach)))
 
     def is_free(self, x: float, y: float, yaw: float) -> bool:
         """Is the robot clear of the world at this base pose? (Answers are remembered
@@ -151,17 +198,19 @@ class FootprintChecker:
 
     def _is_free(self, x: float, y: float, yaw: float) -> bool:
         self.checks += 1
-        clearance = self.occupancy.clearance_at(x, y)
-        if clearance < self._sure_blocked:
+        lower, upper = self.occupancy.clearance_bounds(x, y)
+        if upper < self._sure_blocked:
             return False
         c, s = math.cos(yaw), math.sin(yaw)
         rotation = np.array([[c, s], [-s, c]])
-        # each part is checked only if something it can touch is within its reach
-        if clearance <= self._sure_free and \
+        # each part is checked only if something it can touch may be within its reach
+        if lower <= self._sure_free and \
                 self.occupancy.blocked_at(self.outline @ rotation + (x, y)).any():
             return False
-        for points, occupancy, reach in self.carried_groups:
-            if clearance > reach:  # (the full map's clearance: no less than its own)
+        for points, occupancy, near in self.carried_groups:
+            # (its own map holds only what rises to its height: mostly far away)
+            i, j = occupancy.coarse_cell(x, y)
+            if i >= 0 and not near[i, j]:
                 continue
             if occupancy.blocked_at(points @ rotation + (x, y)).any():
                 # the outlines over-approximate an arm; the exact check decides, if given

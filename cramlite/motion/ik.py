@@ -11,6 +11,7 @@ solutions keep the torso up (and the other, parked arm clear of tables).
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -88,6 +89,37 @@ class ArmIK:
         if TORSO_JOINT in self.joint_names:
             jid = self.model.getJointId(TORSO_JOINT)
             self._torso = (int(self.model.idx_qs[jid]), int(self.model.idx_vs[jid]))
+        self._shoulder, self._reach = self._shoulder_and_reach()
+
+    def _shoulder_and_reach(self) -> tuple[np.ndarray, float]:
+        """The shoulder's position (torso at 0) and the farthest the tool frame gets from
+        it (the arm stretched out; sampled configurations too, plus 2 cm): a target
+        farther away has no solution, and saying so takes no descent."""
+        model, data = self.model, self.data
+        shoulder = model.getJointId(f"{arm_prefix(self.arm)}_shoulder_pan_joint")
+        rng = np.random.default_rng(0)
+        reach = 0.0
+        for q in [pin.neutral(model), *(self.random_q(rng) for _ in range(500))]:
+            if self._torso is not None:
+                q[self._torso[0]] = 0.0
+            pin.framesForwardKinematics(model, data, q)
+            reach = max(reach, float(np.linalg.norm(data.oMf[self.frame_id].translation
+                                                    - data.oMi[shoulder].translation)))
+        return data.oMi[shoulder].translation.copy(), reach + 0.02
+
+    def out_of_reach(self, target: pin.SE3, fixed_torso_m: float | None = None) -> bool:
+        """Is the target surely too far from the shoulder, at the given torso height (or
+        any height the torso can take)?"""
+        x, y, z = np.asarray(target.translation) - self._shoulder
+        if self._torso is None:
+            dz = z
+        elif fixed_torso_m is not None:
+            dz = z - fixed_torso_m
+        else:
+            lo = self.model.lowerPositionLimit[self._torso[0]]
+            hi = self.model.upperPositionLimit[self._torso[0]]
+            dz = z - min(max(z, lo), hi)
+        return math.sqrt(x * x + y * y + dz * dz) > self._reach
 
     # -- conversions -------------------------------------------------------------------
     def to_q(self, joints: dict[str, float]) -> np.ndarray:
@@ -132,6 +164,8 @@ class ArmIK:
         `fixed_torso_m`: keep the torso at this height (the PR2's torso moves at 1.3 cm/s,
         so a solution that keeps it saves seconds of robot time)."""
         opts = self.options
+        if self.out_of_reach(target, fixed_torso_m):
+            return None
         restarts = opts.restarts if restarts is None else restarts
         starts = [self.to_q(seed_joints)] if seed_joints else []
         while len(starts) < restarts + 1:

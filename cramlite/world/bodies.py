@@ -87,6 +87,8 @@ class RobotBody:
         #: Velocity limit of each joint (rad/s or m/s), from the URDF.
         self.velocity_limits: dict[str, float] = {}
         self.prismatic: set[str] = set()
+        #: The base pose last set (the base is fixed in PyBullet: only this moves it).
+        self._base: tuple[float, float, float] | None = None
         for j in range(p.getNumJoints(body, physicsClientId=client)):
             info = p.getJointInfo(body, j, physicsClientId=client)
             self.link_index[info[12].decode()] = j
@@ -111,8 +113,13 @@ class RobotBody:
         return name not in self.prismatic and lower > upper
 
     def set_base_pose(self, x: float, y: float, yaw: float) -> None:
+        """Move the base (skipped when it is there already: a reset recomputes every link,
+        and collision checks put the base back and forth)."""
+        if (x, y, yaw) == self._base:
+            return
         p.resetBasePositionAndOrientation(self.body, (x, y, 0.0), yaw_quat(yaw),
                                           physicsClientId=self.client)
+        self._base = (x, y, yaw)
 
     def base_pose(self) -> tuple[float, float, float]:
         pos, orn = p.getBasePositionAndOrientation(self.body, physicsClientId=self.client)
