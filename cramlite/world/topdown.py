@@ -21,7 +21,7 @@ from cramlite.world.setup import Setup
 WALL_PREFIX = "wall"
 FLOOR = "floor"
 #: Width (m) of the label columns left and right of the kitchen, and the label spacing.
-LABEL_COLUMN_M = 1.5
+LABEL_COLUMN_M = 1.6
 LABEL_GAP_M = 0.2
 ITEM_COLOUR = "#222222"
 TARGET_COLOUR = "#555555"
