@@ -1,10 +1,9 @@
-"""A driven base path, compact: the executed base positions thinned to a few per metre.
+"""A driven base path, compact: the executed base positions, simplified.
 
-`simplify_path` keeps a point every `spacing_m` along the path (and the last one), then
-drops the points that lie within `tolerance_m` of the straight line between their
-neighbours (Douglas-Peucker), and rounds to the centimetre. A 15 m path of a trial
-becomes a few dozen points (a short JSON list in each bench row), drawn within a
-centimetre of where the robot drove.
+`simplify_path` drops the points that lie within `tolerance_m` of the straight line
+between the points kept around them (Douglas-Peucker) and rounds to the centimetre. The
+executed states of a trial (2 cm apart) become a few dozen points (a short JSON list in
+each bench row), drawn within about a centimetre of where the robot drove.
 """
 
 from __future__ import annotations
@@ -13,26 +12,20 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
-SPACING_M = 0.05
 TOLERANCE_M = 0.01
 
 
-def simplify_path(points: Iterable[Sequence[float]], spacing_m: float = SPACING_M,
-                  tolerance_m: float = TOLERANCE_M) -> list[list[float]]:
+def simplify_path(points: Iterable[Sequence[float]], tolerance_m: float = TOLERANCE_M,
+                  ) -> list[list[float]]:
     """[[x, y], ...] in metres (rounded to 0.01) of the polyline through `points`."""
-    xy = np.asarray([(float(p[0]), float(p[1])) for p in points], dtype=float)
+    xy = np.asarray([(float(p[0]), float(p[1])) for p in points], dtype=float).reshape(-1, 2)
     if len(xy) == 0:
         return []
-    kept = [xy[0]]
-    for point in xy[1:]:
-        if np.hypot(*(point - kept[-1])) >= spacing_m:
-            kept.append(point)
-    if len(xy) > 1 and np.hypot(*(xy[-1] - kept[-1])) > 0:
-        kept.append(xy[-1])
-    thinned = np.array(kept)
-    keep = _douglas_peucker(thinned, tolerance_m)
+    moved = np.r_[True, np.any(np.diff(xy, axis=0) != 0, axis=1)]
+    xy = xy[moved]  # standing still (turning on the spot) adds nothing
+    keep = _douglas_peucker(xy, tolerance_m)
     out: list[list[float]] = []
-    for x, y in thinned[keep]:
+    for x, y in xy[keep]:
         point = [round(float(x), 2) + 0.0, round(float(y), 2) + 0.0]
         if not out or point != out[-1]:
             out.append(point)
