@@ -58,7 +58,7 @@ def build_report(folder: str | Path, *, figures: bool = True,
         _replays(data, page, media, written, max_replays, speed or DEFAULT_SPEED, say)
     _tidy(media, written)
     out = data.path / PAGE
-    partial = data.path / (PAGE + ".part")
+    partial = data.path / f"{PAGE}.{os.getpid()}.part"  # two builds at once never mix
     try:
         partial.write_text(render_page(page), encoding="utf-8")
         os.replace(partial, out)

@@ -29,10 +29,10 @@ def _pyplot():
     return plt
 
 
-def _save(fig: Any, path: Path) -> Path:
+def _save(fig: Any, path: Path, dpi: int = DPI) -> Path:
     plt = _pyplot()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=DPI, metadata={"Software": None})
+    fig.savefig(path, dpi=dpi, metadata={"Software": None})
     plt.close(fig)
     return path
 
@@ -65,8 +65,8 @@ def setup_map(layout: Layout, rows: Sequence[dict[str, Any]], strategies: Sequen
             if len(xy) > 1:
                 ax.plot(*zip(*xy, strict=True), color=colour, alpha=0.22, linewidth=1.0,
                         zorder=4)
-            if not ok(row) and xy:
-                ax.plot(*xy[-1], marker="x", color=FAILED, markersize=6, alpha=0.5, zorder=10)
+            for x, y in failed_spots(layout, row):
+                ax.plot(x, y, marker="x", color=FAILED, markersize=7, alpha=0.6, zorder=10)
         title = f"{strategy}: no trial yet"
         if best is not None:
             _highlight(ax, layout, best, colour)
@@ -87,12 +87,12 @@ def setup_map(layout: Layout, rows: Sequence[dict[str, Any]], strategies: Sequen
                        markeredgecolor="grey", markersize=9,
                        label="n = fetched n-th (bold trial)"),
                 Line2D([], [], marker="x", linestyle="none", color=FAILED,
-                       label="where a failed trial stopped")]
+                       label="what a failed trial could not do (item, drawer)")]
     from cramlite.world.topdown import legend_handles
 
     fig.legend(handles=handles + legend_handles(), loc="outside lower center",
                ncol=3, fontsize=8, frameon=False)
-    return _save(fig, path)
+    return _save(fig, path, dpi=125)
 
 
 def _highlight(ax: Any, layout: Layout, row: dict[str, Any], colour: str) -> None:
@@ -122,9 +122,21 @@ def _highlight(ax: Any, layout: Layout, row: dict[str, Any], colour: str) -> Non
                     fontweight="bold", color="white", ha="center", va="center", zorder=12,
                     bbox={"boxstyle": "circle,pad=0.25", "facecolor": colour,
                           "edgecolor": "white", "linewidth": 0.6})
-    if not ok(row) and xy:
-        ax.plot(*xy[-1], marker="x", color=FAILED, markersize=11, markeredgewidth=2.5,
-                zorder=11)
+    for x, y in failed_spots(layout, row):
+        ax.plot(x, y, marker="x", color=FAILED, markersize=11, markeredgewidth=2.5, zorder=11)
+
+
+def failed_spots(layout: Layout, row: dict[str, Any]) -> list[tuple[float, float]]:
+    """Where a failed trial went wrong: the start spot of each item (or the middle of each
+    drawer or cupboard) a failure names; for a trial that raised, where it stopped."""
+    if ok(row):
+        return []
+    spots = {s.name: (s.x, s.y) for s in layout.items}
+    spots.update({b.name: ((b.x0 + b.x1) / 2, (b.y0 + b.y1) / 2) for b in layout.containers})
+    named = [spots[f["item"]] for f in row.get("failures") or []
+             if isinstance(f, dict) and f.get("item") in spots]
+    path = row.get("driven_path") or []
+    return sorted(set(named)) or ([tuple(path[-1])] if path else [])
 
 
 def _arrows(ax: Any, xy: Sequence[Sequence[float]], colour: str) -> None:

@@ -254,7 +254,8 @@ def _setup(data: PageData, name: str) -> str:
                      "The kitchen from above, one panel per strategy: every trial's driven base "
                      "path (faint), the first trial's in bold with arrows in the direction of "
                      "travel, the numbers at the items the order it fetched them in; red cross: "
-                     "where a failed trial stopped. Items (●) start where their name is, "
+                     "an item (or drawer, cupboard) a failed trial could not fetch, place, open "
+                     "or close. Items (●) start where their name is, "
                      "targets (□) are where they go.</figcaption></figure>")
     parts.append("<h3>Orders chosen</h3>")
     table = ["<table><tr><th>strategy</th><th>order</th><th>trials</th><th>failed</th>"
