@@ -328,8 +328,10 @@ def _trial(data: PageData, row: dict[str, Any]) -> str:
         parts.append(f"<details{'' if good else ' open'}><summary>Steps and their durations"
                      f"</summary>{table}</details>")
     if tid in data.replays:
-        parts.append(f"<details><summary>Replay (animation, x{e(_speed(data.replays[tid]))} "
-                     f"speed)</summary>{img(data.replays[tid], f'replay of {tid}')}</details>")
+        parts.append(f"<figure>{img(data.replays[tid], f'replay of {tid}')}<figcaption>Replay "
+                     f"from the trace, {e(_speed(data.replays[tid]))} times faster than the "
+                     "robot moved (robot time and the action in progress at the top left)."
+                     "</figcaption></figure>")
     elif tid in data.replay_notes:
         parts.append(f'<p class="note">{e(data.replay_notes[tid])}</p>')
     parts.append("</div>")
