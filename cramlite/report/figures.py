@@ -66,7 +66,8 @@ def setup_map(layout: Layout, rows: Sequence[dict[str, Any]], strategies: Sequen
                 ax.plot(*zip(*xy, strict=True), color=colour, alpha=0.22, linewidth=1.0,
                         zorder=4)
             for x, y in failed_spots(layout, row):
-                ax.plot(x, y, marker="x", color=FAILED, markersize=7, alpha=0.6, zorder=10)
+                ax.plot(x, y, marker="x", color=FAILED, markersize=9, markeredgewidth=1.8,
+                        alpha=0.8, zorder=10)
         title = f"{strategy}: no trial yet"
         if best is not None:
             _highlight(ax, layout, best, colour)
