@@ -87,6 +87,7 @@ class TrialRunner:
 
         if plan not in PLANS:
             raise ValueError(f"unknown plan {plan!r}; expected one of {', '.join(PLANS)}")
+        self.modules.release_all()
         self.world.restore(self._initial)
         if plan == "clear-table":
             self._items_at_targets()
@@ -138,7 +139,8 @@ class TrialRunner:
             self.world.objects[spec.name].set_pose(spec.target.xyz, yaw_quat(spec.target.yaw))
 
     def _check(self, plan: str) -> tuple[dict[str, dict[str, Any]], bool]:
-        """Where each item ended; success = all at their goal and resting."""
+        """Where each item ended; success = all at their goal and resting, and every
+        drawer and door closed."""
         items, success = {}, True
         counter = self.world.surface("counter")
         for spec in self.setup.items:
@@ -149,10 +151,18 @@ class TrialRunner:
                     abs(z - spec.target.z) <= RESTING_TOLERANCE_M
                 items[spec.name] = {"position": [round(x, 4), round(y, 4), round(z, 4)],
                                     "off_target_m": round(off, 4), "ok": ok}
+            elif spec.container:  # clearing up: back into its drawer or cupboard
+                off = math.dist((x, y), (spec.pose.x, spec.pose.y))
+                ok = off <= self.options.place_tolerance_m and \
+                    abs(z - spec.pose.z) <= RESTING_TOLERANCE_M
+                items[spec.name] = {"position": [round(x, 4), round(y, 4), round(z, 4)],
+                                    "off_target_m": round(off, 4), "ok": ok}
             else:
                 ok = counter.contains_xy(x, y) and abs(z - counter.top_z) <= RESTING_TOLERANCE_M
                 items[spec.name] = {"position": [round(x, 4), round(y, 4), round(z, 4)], "ok": ok}
             success &= ok
+        # every drawer and door is closed again
+        success &= all(abs(v) < 1e-3 for v in self.world.world_joint_positions().values())
         return items, success
 
 

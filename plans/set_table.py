@@ -20,6 +20,7 @@ from cramlite.designators import (
     TransportAction,
 )
 from cramlite.designators.locations import IDEAL_STANDOFF_M
+from cramlite.designators.storage import CloseAction, container_of, is_open
 from cramlite.strategies import Candidate, Strategy
 from cramlite.strategies.base import checked_choice
 from cramlite.world.pr2 import TORSO_UP_M
@@ -33,8 +34,10 @@ def item_candidate(ctx: RobotContext, setup: Setup, name: str,
     (`then_at`)."""
     spec = setup.item(name)
     (x, y, z), _ = ctx.modules.object_pose(name)
+    container = container_of(ctx, name)  # closed storage now: the OPM's c applies
     return Candidate(name=name, position=(x, y, z), category=spec.category,
-                     contained=spec.contained, then_at=then_at,
+                     contained=container is not None and not is_open(ctx, container),
+                     then_at=then_at,
                      fetch_at=fetch_estimate(robot_position(ctx), (x, y)),
                      metadata={"type": spec.type, "aliases": spec.aliases})
 
@@ -61,9 +64,14 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
                             goals: dict[str, dict], report: PlanReport) -> PlanReport:
     """The loop both plans share: ask, transport, record. `goals` maps each item to the
     TransportAction arguments that say where it goes (`target` or `surface`)."""
-    ParkArmsAction().perform(ctx)
-    MoveTorsoAction(TORSO_UP_M).perform(ctx)
     remaining = [n for n in setup.baseline_order if n in goals]
+    try:
+        ParkArmsAction().perform(ctx)
+        MoveTorsoAction(TORSO_UP_M).perform(ctx)
+    except PlanFailure as failure:  # stuck where it stands: nothing can be fetched
+        ctx.note(f"failed: {failure}")
+        report.failures.append(failure)
+        return report
 
     def then_at(name: str) -> tuple[float, float, float]:
         goal = goals[name].get("target") or goals[name].get("preferred")
@@ -89,11 +97,12 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
             report.failures.append(failure)
         (x, y, _), _ = ctx.modules.object_pose(chosen.name)
         report.add_leg(here[:2], chosen.position[:2], (x, y))
-    try:
-        ParkArmsAction().perform(ctx)
-    except PlanFailure as failure:
-        ctx.note(f"failed: {failure}")
-        report.failures.append(failure)
+    for step in [*(CloseAction(name) for name in list(ctx.opened)), ParkArmsAction()]:
+        try:  # whatever it opened is closed again, and the arms are tucked
+            step.perform(ctx)
+        except PlanFailure as failure:
+            ctx.note(f"failed: {failure}")
+            report.failures.append(failure)
     return report
 
 

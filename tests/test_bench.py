@@ -461,3 +461,18 @@ def test_all_orders_and_random_setups(tmp_path: Path) -> None:
     assert {r["setup"] for r in rows(randoms)} == {"v1", saved[0].stem, saved[1].stem}
     rerun = run_cli("run", str(saved[0]), "--json")
     assert rerun.returncode == 0, rerun.stderr
+
+
+def test_random_setups_store_items_in_the_containers_and_are_all_valid(tmp_path: Path) -> None:
+    import yaml
+
+    from cramlite.bench.random_setups import generate_setups
+
+    made = generate_setups(12, seed=3, folder=tmp_path)
+    # every generated setup loads (none is thrown away and replaced by the next index)
+    assert list(made) == [f"random-3-{i:03d}" for i in range(12)]
+    stored = [item for path in made.values()
+              for item in yaml.safe_load(path.read_text())["items"] if "in" in item]
+    print(len(stored), [(i["name"], i["in"]) for i in stored])
+    assert {i["in"] for i in stored} == {"drawer_1", "drawer_2", "cupboard"}
+    assert all(i["name"] in ("spoon", "cup", "bowl") for i in stored if i["in"] != "cupboard")

@@ -256,3 +256,26 @@ def test_success_needs_every_item_at_its_target(monkeypatch) -> None:
     assert not result.failures
     assert not result.success
     assert [n for n, item in result.items.items() if not item["ok"]] == ["milk"]
+
+
+def test_the_base_check_counts_the_parked_arms_as_they_are_now() -> None:
+    """A parked PR2's elbows and grippers stick out of its base; the base planner's check
+    must see them where they are after the torso moved (not where they were when it last
+    looked), and leave the robot as it was."""
+    from cramlite.designators import MoveTorsoAction
+
+    with World.from_setup(load_setup("c2")) as world, simulated_robot(world) as ctx:
+        ParkArmsAction().perform(ctx)
+        MoveTorsoAction(0.0).perform(ctx)
+        world.set_world_joint(world.containers["cupboard"].joint, 1.15)  # door half open
+        ctx.refresh_maps()
+        # the base clear of the door; the parked left gripper under it with the torso down,
+        # 4 cm inside it with the torso up (replayed: this pose once went through it)
+        near_door = (0.2518, 1.5291, -0.4359)
+        assert ctx.checker.occupancy.clearance_at(*near_door[:2]) > ctx.checker.half_size_m
+        assert ctx.base_checker().is_free(*near_door)
+        MoveTorsoAction(0.25).perform(ctx)
+        assert not ctx.base_checker().is_free(*near_door)
+        torso = ctx.modules.joint_positions(["torso_lift_joint"])["torso_lift_joint"]
+        assert torso == pytest.approx(0.25, abs=1e-9)  # the check put everything back
+        assert ctx.base_checker().is_free(0.25, 0.9, -0.4359)  # away from the door: clear

@@ -67,7 +67,7 @@ DOOR_HANDLE = {"bar": (-0.06, -0.04, -0.53, -0.51, 0.12, 0.30),
 ARTICULATED = {
     "drawer_1": ("drawer", (1.25, -0.70, 0.58), (-1, 0, 0), 0.35, "0.62 0.48 0.34 1"),
     "drawer_2": ("drawer", (1.25, -0.27, 0.58), (-1, 0, 0), 0.35, "0.62 0.48 0.34 1"),
-    "cupboard_door": ("door", (1.25, 2.045, 1.0), (0, 0, -1), 2.4, "0.48 0.52 0.58 1"),
+    "cupboard_door": ("door", (1.25, 2.045, 1.0), (0, 0, -1), 2.3, "0.48 0.52 0.58 1"),
 }
 #: Containers, as the setup files name them: the moving part, its joint and handle, where
 #: items rest (link, box in its frame, z = the bottom items stand on), how the handle is

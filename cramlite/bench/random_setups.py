@@ -1,7 +1,8 @@
 """Random setups from a seeded generator: the five breakfast items on free spots of the
-counter, the island (away from the table-setting targets) and inside the bin (a
-container: those items are `contained`). Each is validated by loading it in a world
-(on its surface, inside nothing) before it is used, and saved so it can be rerun."""
+counter and the island (away from the table-setting targets), or stored in the kitchen's
+drawers and cupboard (`in:`, so `contained`: what fits there). Each is validated by
+loading it in a world (on its surface or inside its container, inside nothing) before it
+is used, and saved so it can be rerun."""
 
 from __future__ import annotations
 
@@ -21,12 +22,20 @@ SIZES = {"spoon": (0.16, 0.03), "breakfast-cereal": (0.07, 0.19), "milk": (0.075
          "cup": (0.08, 0.08), "bowl": (0.16, 0.16)}
 TARGETS = {"spoon": (-0.85, 1.0), "cup": (-1.0, 1.1), "bowl": (-0.85, 1.24),
            "breakfast-cereal": (-1.0, 1.43), "milk": (-0.85, 1.6)}
-# surface: (x range, y ranges, top z, probability)
-REGIONS: dict[str, tuple[tuple[float, float], list[tuple[float, float]], float, float]] = {
-    "counter": ((1.38, 1.55), [(-0.8, 1.2)], 0.85, 0.5),
-    "island": ((-0.95, -0.82), [(0.65, 0.8), (1.85, 2.1)], 0.86, 0.3),
-    "bin": ((-1.0, -0.92), [(2.36, 2.6)], 0.87, 0.2),
+#: Where items go: surface or container -> (x range, y ranges, bottom z, probability, the
+#: items that fit; None: all). Container spots are where an item stands with it closed.
+REGIONS: dict[str, tuple[tuple[float, float], list[tuple[float, float]], float, float,
+                         frozenset[str] | None]] = {
+    "counter": ((1.38, 1.55), [(-0.8, 1.2)], 0.85, 0.4, None),
+    "island": ((-0.95, -0.82), [(0.65, 0.8), (1.85, 2.1)], 0.86, 0.25, None),
+    "drawer_1": ((1.36, 1.49), [(-0.76, -0.64)], 0.6, 0.1,
+                 frozenset({"spoon", "cup", "bowl"})),  # 18 cm high inside
+    "drawer_2": ((1.36, 1.49), [(-0.33, -0.21)], 0.6, 0.1,
+                 frozenset({"spoon", "cup", "bowl"})),
+    "cupboard": ((1.36, 1.5), [(1.6, 1.9)], 1.0, 0.15, None),
 }
+#: Regions that are containers (the others are surfaces).
+CONTAINERS = frozenset({"drawer_1", "drawer_2", "cupboard"})
 SPACING_M = 0.06
 ATTEMPTS = 200
 
@@ -43,14 +52,14 @@ def _clear(x: float, y: float, name: str, placed: list[tuple[float, float, str]]
 
 
 def random_setup_data(rng: np.random.Generator, name: str) -> dict[str, Any]:
-    names = list(REGIONS)
-    weights = np.array([REGIONS[n][3] for n in names])
     placed: list[tuple[float, float, str]] = []
     items = []
     for item in ITEMS:
+        names = [n for n, r in REGIONS.items() if r[4] is None or item in r[4]]
+        weights = np.array([REGIONS[n][3] for n in names])
         for _ in range(ATTEMPTS):
-            surface = names[int(rng.choice(len(names), p=weights / weights.sum()))]
-            (x0, x1), bands, z, _ = REGIONS[surface]
+            region = names[int(rng.choice(len(names), p=weights / weights.sum()))]
+            (x0, x1), bands, z, _, _ = REGIONS[region]
             y0, y1 = bands[int(rng.integers(len(bands)))]
             x, y = float(rng.uniform(x0, x1)), float(rng.uniform(y0, y1))
             if _clear(x, y, item, placed):
@@ -59,9 +68,9 @@ def random_setup_data(rng: np.random.Generator, name: str) -> dict[str, Any]:
             raise SetupError(f"could not place {item} after {ATTEMPTS} tries", source=name)
         placed.append((x, y, item))
         tx, ty = TARGETS[item]
+        where = {"in": region} if region in CONTAINERS else {"surface": region}
         items.append({"name": item, "type": item, "pose": [round(x, 3), round(y, 3), z, 0.0],
-                      "surface": surface, "contained": surface == "bin",
-                      "category": "mid" if item == "bowl" else "none",
+                      **where, "category": "mid" if item == "bowl" else "none",
                       "target": [tx, ty, 0.86, 0.0]})
     order = [ITEMS[i] for i in rng.permutation(len(ITEMS))]
     return {"format": 1, "name": name,

@@ -21,7 +21,8 @@ import numpy as np
 from cramlite.bench.specs import FIXED_ORDER
 from cramlite.evaluation.metrics import edit_distance
 
-MEASURES = ("wall_s", "robot_time_s", "base_path_m", "straight_line_m", "drive_s", "arm_s")
+MEASURES = ("wall_s", "robot_time_s", "base_path_m", "straight_line_m", "drive_s", "arm_s",
+            "open_close_s")
 
 
 def _float(value: Any) -> float:
@@ -46,7 +47,7 @@ def summarise(rows: Sequence[dict[str, Any]], baseline_orders: dict[str, Sequenc
         entry: dict[str, Any] = {"setup": setup, "strategy": strategy, "trials": len(group),
                                  "success_rate": sum(map(_ok, group)) / len(group)}
         for measure in MEASURES:
-            values = [_float(r[measure]) for r in group if _ok(r)]
+            values = [_float(r.get(measure)) for r in group if _ok(r)]
             values = [v for v in values if np.isfinite(v)]
             entry[f"{measure}_mean"] = float(np.mean(values)) if values else float("nan")
             entry[f"{measure}_median"] = float(np.median(values)) if values else float("nan")
@@ -71,8 +72,8 @@ def paired_tests(rows: Sequence[dict[str, Any]], strategy: str, reference: str =
              for (s, t, name) in by_key if name == strategy and (s, t, reference) in by_key]
     result: dict[str, Any] = {"strategy": strategy, "reference": reference, "pairs": len(pairs)}
     for measure in MEASURES[1:]:
-        a = np.array([_float(x[measure]) for x, _ in pairs])
-        b = np.array([_float(y[measure]) for _, y in pairs])
+        a = np.array([_float(x.get(measure)) for x, _ in pairs])
+        b = np.array([_float(y.get(measure)) for _, y in pairs])
         test: dict[str, Any] = {"mean": float(a.mean()) if len(a) else None,
                                 "reference_mean": float(b.mean()) if len(b) else None}
         if len(a) and np.any(a != b):
@@ -82,9 +83,9 @@ def paired_tests(rows: Sequence[dict[str, Any]], strategy: str, reference: str =
             test.update(W=None, p=None, note="no pairs or no differences")
         setups = sorted({x["setup"] for x, _ in pairs})
         if len(setups) >= 2:
-            ma = [np.mean([_float(x[measure]) for x, _ in pairs if x["setup"] == s])
+            ma = [np.mean([_float(x.get(measure)) for x, _ in pairs if x["setup"] == s])
                   for s in setups]
-            mb = [np.mean([_float(y[measure]) for _, y in pairs if y["setup"] == s])
+            mb = [np.mean([_float(y.get(measure)) for _, y in pairs if y["setup"] == s])
                   for s in setups]
             if np.any(np.array(ma) != np.array(mb)):
                 res = stats.wilcoxon(ma, mb)
@@ -125,14 +126,16 @@ def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[
             writer.writeheader()
             writer.writerows(summary)
     lines = ["| setup | strategy | trials | success | wall s (mean/median) | robot time s | "
-             "driving s | arm s | driven path m | straight-line m | edit vs baseline | order |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "driving s | arm s | open/close s | driven path m | straight-line m | "
+             "edit vs baseline | order |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for e in summary:
         lines.append(
             f"| {e['setup']} | {e['strategy']} | {e['trials']} | {e['success_rate']:.0%} | "
             f"{e['wall_s_mean']:.2f} / {e['wall_s_median']:.2f} | "
             f"{e['robot_time_s_mean']:.2f} / {e['robot_time_s_median']:.2f} | "
             f"{e['drive_s_mean']:.2f} | {e['arm_s_mean']:.2f} | "
+            f"{e['open_close_s_mean']:.2f} | "
             f"{e['base_path_m_mean']:.2f} / {e['base_path_m_median']:.2f} | "
             f"{e['straight_line_m_mean']:.2f} / {e['straight_line_m_median']:.2f} | "
             f"{e['edit_vs_baseline']:.2f} | {e['order']} |")
@@ -140,7 +143,8 @@ def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[
     lines.append("Driven path: length of the base paths actually executed. Straight-line: sum "
                  "over steps of the xy distances robot -> item -> where it was put. Robot time: "
                  "wall time + driving time (base trajectories at 1.0 m/s, 1 rad/s) + arm time "
-                 "(arm, torso and gripper trajectories timed from the URDF's limits).")
+                 "(arm, torso and gripper trajectories timed from the URDF's limits); "
+                 "open/close: the part of it spent opening and closing drawers and doors.")
     for test in tests:
         lines += ["", f"Wilcoxon signed-rank, {test['strategy']} vs {test['reference']} "
                       f"({test['pairs']} pairs by setup and trial):"]

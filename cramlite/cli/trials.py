@@ -79,8 +79,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     params = parse_params(args.params)
     strategy_checked(args.strategy, params=params, dims=args.dims)
     setup = load_setup(args.setup)
+    from cramlite.designators.context import ExecutionOptions
+
+    options = ExecutionOptions(keep_containers_open=args.keep_open)
     try:
-        runner = TrialRunner(setup, gui=args.gui)
+        runner = TrialRunner(setup, gui=args.gui, options=options)
     except RuntimeError as exc:  # no display for --gui
         raise UserInputError(str(exc), field="--gui") from None
     with runner:
@@ -108,6 +111,9 @@ def cmd_run(args: argparse.Namespace) -> int:
               f"{result.drive_s:.2f} s + arm {result.arm_s:.2f} s "
               f"({result.planned_arm_motions} of {result.arm_motions} arm motions planned "
               "around obstacles)")
+        if result.open_close_s:
+            print(f"  opening and closing drawers and doors took {result.open_close_s:.2f} s of "
+                  "that")
         if args.trace:
             print(f"  trace: {args.trace}")
         for failure in result.failures:
@@ -166,6 +172,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                      help="projection the strategy measures distance in (default xy)")
     run.add_argument("--seed", type=non_negative_int, default=0,
                      help="random seed of the trial (default 0)")
+    run.add_argument("--keep-open", action="store_true",
+                     help="leave the drawers and doors the robot opens open until the plan "
+                          "ends (default: each is closed as soon as its item is out or in)")
     run.add_argument("--gui", action="store_true", help="show the PyBullet GUI (needs a display)")
     run.add_argument("--json", action="store_true", help="print one JSON object")
     run.add_argument("--log", action="store_true", help="also print what the plan did")

@@ -11,6 +11,7 @@ tried.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -81,7 +82,6 @@ class ParkArmsAction:
             now = ctx.modules.joint_positions(list(target))
             if any(abs(wrap_angle(now[n] - v)) > PARKED_TOLERANCE_RAD for n, v in target.items()):
                 MoveArmJointsMotion(dict(target)).perform(ctx)
-        update_carried(ctx)
 
 
 @dataclass
@@ -101,7 +101,7 @@ class NavigateAction:
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
-        update_carried(ctx)
+        ctx.base_checker()  # up to date with what sticks out of the base
         start = ctx.modules.base_pose()
         path = ctx.base_planner.plan(start, self.target, ctx.rng)
         if path is None:
@@ -265,11 +265,13 @@ class TransportAction:
         if destination is not None and is_open(ctx, destination):
             target = _at(ctx, destination, local)
         origin, _ = obj.pose(ctx)
-        picked_from, planned = self._fetch(ctx, obj, target, plan_delivery=destination is None
-                                           or is_open(ctx, destination))
-        if source is not None and not ctx.options.keep_containers_open \
-                and source.name in ctx.opened:
-            CloseAction(source.name).perform(ctx)  # the item is out: close it again
+        closed = destination if destination is not None and not is_open(ctx, destination) \
+            else None
+        picked_from, planned = self._fetch(ctx, obj, target, closed, local)
+        # the item is out: close its container again (with the free hand; if that hand
+        # cannot, once the item is delivered)
+        to_close = [] if source is None or ctx.options.keep_containers_open else [source]
+        to_close = [c for c in to_close if not _closed_now(ctx, CloseAction, c)]
         try:
             if destination is not None and not is_open(ctx, destination):
                 OpenAction(destination.name).perform(ctx)
@@ -278,16 +280,18 @@ class TransportAction:
         except PlanFailure:
             self._put_back(ctx, obj, origin, picked_from)
             raise
-        if destination is not None and not ctx.options.keep_containers_open \
-                and destination.name in ctx.opened:
-            CloseAction(destination.name).perform(ctx)  # the item is in: close it
+        if destination is not None and not ctx.options.keep_containers_open:
+            to_close.append(destination)  # the item is in: close it
+        for container in to_close:  # (what cannot be closed now, the plan closes at its end)
+            _closed_now(ctx, CloseAction, container)
 
     def _fetch(self, ctx: RobotContext, obj: ObjectDesignator, target: Vec3 | None,
-               plan_delivery: bool = True,
+               closed=None, local: Vec3 | None = None,
                ) -> tuple[ReachablePose, tuple[Vec3, ReachablePose] | None]:
         """Navigate and pick up, trying base poses best first; an arm and grasp that could
-        not put the object down at the goal are not used (unless the goal cannot be
-        planned yet, `plan_delivery` False: it is inside a closed container)."""
+        not put the object down at the goal are not used. A goal inside a `closed`
+        container (at `local` in its inside's frame) is planned as if it were open."""
+        from cramlite.designators.storage import virtually_open
         (x, y, z), orientation = obj.pose(ctx)
         height = obj.height_m(ctx)
         tried: list[str] = []
@@ -303,11 +307,11 @@ class TransportAction:
             # put down from base yaw psi, the object will stand at psi + yaw_offset
             yaw_offset = quat_yaw(orientation) - reach.base[2]
             combo = (reach.arm, reach.grasp, 0 if round_object else round(yaw_offset * 18))
-            if not plan_delivery:
-                deliverable[combo] = ((0.0, 0.0, 0.0), reach)  # placeholder: found later
             if combo not in deliverable:
-                deliverable[combo] = self._plan_delivery(ctx, obj, reach, height, yaw_offset,
-                                                         target)
+                with virtually_open(ctx, closed) if closed else contextlib.nullcontext():
+                    goal = _at(ctx, closed, local) if closed else target
+                    deliverable[combo] = self._plan_delivery(ctx, obj, reach, height,
+                                                             yaw_offset, goal)
                 if deliverable[combo] is None:
                     tried.append(f"{reach.arm} arm {reach.grasp} grasp: could not put it down "
                                  "at the goal")
@@ -321,7 +325,7 @@ class TransportAction:
                 NavigateAction(reach.base).perform(ctx)
                 PickUpAction(obj, reach=reach).perform(ctx)
                 ctx.note(f"picked {obj.name} from {reach.describe()}")
-                return reach, planned if plan_delivery else None
+                return reach, planned
             except PlanFailure as failure:
                 tried.append(f"{reach.describe()}: {failure.kind}: {failure.reason}")
                 last = failure
@@ -425,7 +429,19 @@ class TransportAction:
                 del ctx.holding[arm]
                 ctx.modules.settle(ctx.options.settle_s, [obj.name])
                 ctx.note(f"let go of {obj.name}")
-        update_carried(ctx)
+        ctx.footprint_stale = True
+
+
+def _closed_now(ctx: RobotContext, close, container) -> bool:
+    """Try to close a container this context opened; a failure is noted, not raised."""
+    if container.name not in ctx.opened:
+        return True
+    try:
+        close(container.name).perform(ctx)
+        return True
+    except PlanFailure as failure:
+        ctx.note(f"left {container.name} open for now: {failure}")
+        return False
 
 
 def _at(ctx: RobotContext, container, local: Vec3) -> Vec3:
@@ -453,10 +469,10 @@ def footprint_outline(points_xy: np.ndarray, spacing: float) -> np.ndarray:
 
 def update_carried(ctx: RobotContext) -> None:
     """Tell the base planner what sticks out of the base while it drives: every carried
-    object (its box seen from above) and every link of the robot that reaches beyond the
-    base square (an arm holding something, say; from its collision mesh), each as an
-    outline in the robot's frame checked against the furniture that rises above the
-    lowest point that sticks out."""
+    object (its box seen from above) and every arm link that reaches beyond the base
+    square (from its collision mesh; a parked PR2's elbows stick out 0.43 m to the sides),
+    each as an outline in the robot's frame checked against the furniture that rises above
+    the lowest point that sticks out."""
     x, y, yaw = ctx.modules.base_pose()
     c, s = math.cos(yaw), math.sin(yaw)
     groups: dict[float, list[np.ndarray]] = {}
@@ -470,10 +486,35 @@ def update_carried(ctx: RobotContext) -> None:
         dx, dy = corners[:, 0] - x, corners[:, 1] - y
         robot_frame = np.column_stack([c * dx + s * dy, -s * dx + c * dy, corners[:, 2]])
         _stick_out(robot_frame, ctx.checker.half_size_m, groups)
-    for bucket, points in _upper_body_outline(ctx).items():
+    for bucket, points in _upper_body_outline(ctx, set(ARMS)).items():
         groups.setdefault(bucket, []).append(points)
     ctx.checker.set_carried([(np.vstack(points), carried_map(ctx.world, bucket))
-                             for bucket, points in sorted(groups.items())])
+                             for bucket, points in sorted(groups.items())],
+                            _exact_upper_body(ctx) if groups else None)
+    ctx.footprint_stale = False
+
+
+def _exact_upper_body(ctx: RobotContext):
+    """A check of the robot's upper body and carried objects, as they are now, at another
+    base pose, in the world itself (PyBullet): exact where the 2D outlines are coarse."""
+    robot = ctx.world.robot
+    held = ctx.held_objects()
+    scene = ctx.collisions.scene(["torso_lift_joint"], held)
+    q = scene.current()
+    poses = {h.name: ctx.world.objects[h.name].pose() for h in held}
+
+    def check(x: float, y: float, yaw: float) -> bool:
+        base, now = robot.base_pose(), scene.current()
+        robot.set_base_pose(x, y, yaw)
+        try:
+            return scene.is_free(q)
+        finally:
+            robot.set_base_pose(*base)
+            scene.set_state(now)
+            for name, (pos, orn) in poses.items():
+                ctx.world.objects[name].set_pose(pos, orn)
+
+    return check
 
 
 def _stick_out(points: np.ndarray, square: float, groups: dict[float, list[np.ndarray]],
@@ -489,15 +530,17 @@ def _stick_out(points: np.ndarray, square: float, groups: dict[float, list[np.nd
     groups.setdefault(bucket, []).append(np.vstack([outline, points[out, :2]]))
 
 
-def _upper_body_outline(ctx: RobotContext) -> dict[float, np.ndarray]:
-    """What of the robot's links sticks out of its base in its current configuration
-    (robot frame, by height); each arm's part computed once per configuration of that arm
-    (and the torso) and world."""
+def _upper_body_outline(ctx: RobotContext, arms: set[str]) -> dict[float, np.ndarray]:
+    """What of the links of `arms` sticks out of the base in the current configuration
+    (robot frame, by height); computed once per configuration of the arm (and the torso)
+    and world."""
     robot = ctx.world.robot
     joints = robot.joint_positions()
     parts = ctx.collisions.upper_body_parts()
     out: dict[float, list[np.ndarray]] = {}
     for part, (names, links) in parts.items():
+        if part not in arms:
+            continue
         key = ("outline", part, tuple(round(joints[n], 2) for n in names))
         if key not in ctx.world.cache:
             groups: dict[float, list[np.ndarray]] = {}

@@ -140,6 +140,9 @@ class RobotContext:
 
     def __post_init__(self) -> None:
         self.checker = FootprintChecker(occupancy_map(self.world))
+        #: What sticks out of the base (arms, held objects) has changed since the checker
+        #: was told (see `base_checker`).
+        self.footprint_stale = True
         self.base_planner = BaseMotionPlanner(self.checker, self.planner_options)
         self.collisions = collision_checker(self.world)
         self.limits = robot_limits(self.world, self.options.joint_speed_scale)
@@ -180,12 +183,23 @@ class RobotContext:
         t0 = self.time_s
         self.modules.execute_joint_trajectory(trajectory, self._observer(t0, trajectory.times))
         self.arm_s += trajectory.duration_s
+        self.footprint_stale = True  # an arm or the torso moved
         if trajectory.world:  # a drawer or door moved: the base planner's map changes
             self.refresh_maps()
 
     def refresh_maps(self) -> None:
         """Point the base planner at the map of the world as it stands now."""
         self.checker.occupancy = occupancy_map(self.world)
+        self.footprint_stale = True  # (what sticks out is checked against maps too)
+
+    def base_checker(self) -> FootprintChecker:
+        """The base's footprint check with what sticks out of the base as it is now (the
+        arms and what they hold, against the drawers and doors where they stand)."""
+        if self.footprint_stale:
+            from cramlite.designators.actions import update_carried  # (it imports this)
+
+            update_carried(self)
+        return self.checker
 
     def _observer(self, t0: float, times: np.ndarray):
         if self.trace is None:

@@ -31,7 +31,7 @@ LIFT_M = 0.08
 #: robot's midline (pointing forward, the PR2's long gripper cannot hold it this close).
 CARRY_X_M = 0.35
 CARRY_Y_M = 0.20
-CARRY_BOTTOM_Z_M = 0.97
+CARRY_BOTTOM_Z_M = 1.03
 
 
 def grasps_for(height_m: float) -> list[str]:

@@ -142,7 +142,7 @@ class CostmapLocation:
         ik_checks = 0
         detours = []
         for _, base, arm, grasp in self.candidates(ctx):
-            if not ctx.checker.is_free(*base):
+            if not ctx.base_checker().is_free(*base):
                 self.rejected["footprint"] += 1
                 continue
             if ik_checks >= self.max_ik_checks:

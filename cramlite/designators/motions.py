@@ -155,6 +155,7 @@ class AttachMotion:
     @recorded
     def perform(self, ctx: RobotContext) -> None:
         ctx.modules.attach(self.arm, self.obj)
+        ctx.footprint_stale = True
 
 
 @dataclass(frozen=True)
@@ -165,3 +166,4 @@ class DetachMotion:
     @recorded
     def perform(self, ctx: RobotContext) -> None:
         ctx.modules.detach(self.arm, self.obj)
+        ctx.footprint_stale = True

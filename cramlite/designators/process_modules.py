@@ -84,6 +84,11 @@ class SimulatedProcessModules(ProcessModules):
             p.setCollisionFilterGroupMask(self.robot.body, link, 0, 0,
                                           physicsClientId=self.client)
 
+    def release_all(self) -> None:
+        """Let go of everything (a new trial starts with empty hands)."""
+        for obj, (arm, _, _) in list(self._attached.items()):
+            self.detach(arm, obj)
+
     def execute_base_trajectory(self, trajectory: BaseTrajectory,
                                 on_state: StateObserver = None) -> None:
         for i, (x, y, yaw) in enumerate(trajectory.poses):

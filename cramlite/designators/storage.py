@@ -14,8 +14,9 @@ fall through to the next base pose or arm.
 
 from __future__ import annotations
 
-import itertools
+import contextlib
 import math
+import zlib
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
@@ -30,14 +31,14 @@ from cramlite.designators.failures import (
     PlanFailure,
 )
 from cramlite.designators.grasps import in_base_frame
-from cramlite.designators.locations import CostmapLocation, held
+from cramlite.designators.locations import CostmapLocation, held, reaching_seed
 from cramlite.designators.motions import MoveArmJointsMotion, MoveGripperMotion, gripper_joints
 from cramlite.designators.tasks import recorded
 from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names
 from cramlite.motion.trajectory import time_along_path, wrap_angle
 from cramlite.world.bodies import Vec3
 from cramlite.world.containers import Container
-from cramlite.world.pr2 import TORSO_JOINT
+from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT
 
 BasePose = tuple[float, float, float]
 #: Handle path samples: about this far apart along the handle's way.
@@ -139,10 +140,7 @@ class AccessingLocation:
         maps = self._stage_maps(ctx)
         rings = CostmapLocation(point, {"handle": 0.0}, "", self.arms)
         checks = 0
-        # what worked before in this world first (the same container, the same stretch)
-        known = [(0.0, base, arm, "") for base, arm in ctx.world.cache.get(self._key(), [])
-                 if arm in self.arms]
-        for _, base, arm, _ in itertools.chain(known, rings.candidates(ctx)):
+        for _, base, arm, _ in rings.candidates(ctx):
             if abs(wrap_angle(base[2] - facing)) > MAX_SQUINT_RAD:
                 continue
             if not all(_footprint_free(ctx, stage, base) for stage in maps):
@@ -153,13 +151,7 @@ class AccessingLocation:
             checks += 1
             access = self.reach_from(ctx, base, arm, path)
             if access is not None:
-                worked = ctx.world.cache.setdefault(self._key(), [])
-                if (base, arm) not in worked:
-                    worked.insert(0, (base, arm))
                 yield access
-
-    def _key(self) -> tuple:
-        return ("access", self.container.name, round(self.start, 3), round(self.end, 3))
 
     def _stage_maps(self, ctx: RobotContext) -> list:
         out = []
@@ -172,39 +164,35 @@ class AccessingLocation:
                    path: HandlePath | None = None) -> AccessPose | None:
         """IK along the handle path from one base pose, every state checked (or None)."""
         path = path or handle_path(ctx, self.container, self.start, self.end)
-        ik = arm_ik(arm)
         names = tuple([TORSO_JOINT, *arm_joint_names(arm)])
         torso = ctx.modules.joint_positions([TORSO_JOINT])[TORSO_JOINT]
-        seed = ctx.ik_seeds.get((arm, "handle", self.container.name))
-        # both ends first: most base poses fail there, before the whole path is solved
-        for pose in (path.poses[0], path.poses[-1]):
-            if ik.solve(in_base_frame(pose, base), ctx.rng, seed, fixed_torso_m=torso,
-                        restarts=4) is None:
-                self.rejected["ik"] += 1
-                return None
-        chain = []
-        for i, pose in enumerate(path.poses):
-            local = in_base_frame(pose, base)
-            solution = ik.solve(local, ctx.rng, seed if i == 0 else chain[-1],
-                                fixed_torso_m=torso, restarts=4 if i == 0 else 0)
-            if solution is None:
-                self.rejected["ik"] += 1
-                return None
-            chain.append(solution.joints)
-        pre = ik.solve(in_base_frame(backed_off(path.poses[0], HANDLE_CLEARANCE_M), base),
-                       ctx.rng, chain[0], fixed_torso_m=torso, restarts=1)
-        post = ik.solve(in_base_frame(backed_off(path.poses[-1], HANDLE_CLEARANCE_M), base),
-                        ctx.rng, chain[-1], fixed_torso_m=torso, restarts=1)
-        if pre is None or post is None:
+        solved = self._solve(ctx, base, arm, torso, path)
+        if solved is None:
             self.rejected["ik"] += 1
             return None
+        chain, pre, post = solved
         states, values, arc = _densify(ctx, names, chain, path)
-        if not self._free(ctx, base, arm, names, states, values, pre.joints, post.joints):
+        if not self._free(ctx, base, arm, names, states, values, pre, post):
             self.rejected["arm collision"] += 1
             return None
-        ctx.ik_seeds[(arm, "handle", self.container.name)] = chain[0]
-        return AccessPose(base, arm, self.container.name, names, pre.joints, states, values,
-                          arc, post.joints)
+        return AccessPose(base, arm, self.container.name, names, pre, states, values, arc,
+                          post)
+
+    def _solve(self, ctx: RobotContext, base: BasePose, arm: str, torso: float,
+               path: HandlePath) -> tuple[list[dict[str, float]], dict, dict] | None:
+        """IK along the handle path (each sample from the previous one), and for the
+        pre-grasp and the retreat: a pure function of the container, the stretch, the base
+        pose, the arm and the torso (its starts are drawn from a generator seeded by them),
+        so it is computed once per world and reused; what the world around looks like is
+        checked every time (`_free`)."""
+        key = ("handle ik", self.container.name, round(self.start, 4), round(self.end, 4),
+               tuple(round(v, 4) for v in base), arm, round(torso, 4))
+        cache = ctx.world.cache
+        if key not in cache:
+            rng = np.random.default_rng([zlib.crc32(repr(key).encode())])
+            cache[key] = _handle_ik(arm, base, torso, path, rng)
+        return cache[key]
+
 
     def _free(self, ctx: RobotContext, base: BasePose, arm: str, names: tuple[str, ...],
               states: np.ndarray, values: np.ndarray, pre: dict[str, float],
@@ -245,8 +233,41 @@ class AccessingLocation:
                 ", ".join(f"{n} {why[k]}" for k, n in self.rejected.items() if n))
 
 
+def _handle_ik(arm: str, base: BasePose, torso: float, path: HandlePath,
+               rng: np.random.Generator) -> tuple[list[dict[str, float]], dict, dict] | None:
+    """The arm's states along the handle path, from the first start (reaching forward,
+    tucked, random) whose solution can be followed all the way."""
+    ik = arm_ik(arm)
+    ends = [in_base_frame(path.poses[0], base), in_base_frame(path.poses[-1], base)]
+    # both ends first: most base poses fail there, before the whole path is solved
+    if any(ik.solve(end, rng, reaching_seed(arm), fixed_torso_m=torso, restarts=4) is None
+           for end in ends):
+        return None
+    for start in (reaching_seed(arm), {**PARK_JOINTS[arm], TORSO_JOINT: torso}, None):
+        first = ik.solve(ends[0], rng, start, fixed_torso_m=torso,
+                         restarts=0 if start else 2)
+        if first is None:
+            continue
+        chain = [first.joints]
+        for pose in path.poses[1:]:
+            solution = ik.solve(in_base_frame(pose, base), rng, chain[-1],
+                                fixed_torso_m=torso, restarts=0)
+            if solution is None:
+                break
+            chain.append(solution.joints)
+        else:
+            pre = ik.solve(in_base_frame(backed_off(path.poses[0], HANDLE_CLEARANCE_M),
+                                         base), rng, chain[0], fixed_torso_m=torso, restarts=1)
+            post = ik.solve(in_base_frame(backed_off(path.poses[-1], HANDLE_CLEARANCE_M),
+                                          base), rng, chain[-1], fixed_torso_m=torso,
+                            restarts=1)
+            if pre is not None and post is not None:
+                return chain, pre.joints, post.joints
+    return None
+
+
 def _footprint_free(ctx: RobotContext, occupancy, base: BasePose) -> bool:
-    checker = ctx.checker
+    checker = ctx.base_checker()
     saved = checker.occupancy
     checker.occupancy = occupancy
     try:
@@ -312,11 +333,8 @@ def _move_container(ctx: RobotContext, name: str, target: str, arms: Sequence[st
         raise ContainerManipulationFailed(f"cannot {target} it: both hands are full", obj=name)
     tried: list[str] = []
     # the whole way from one base pose, or else in stages (a door that opens wide: pulled
-    # half way from one pose, then on from another), each from its own base pose; how many
-    # stages it took is remembered for this world
-    key = ("stages", name, target)
-    known = ctx.world.cache.get(key)
-    for stages in ([known] if known else []) + [s for s in (1, 2, 3) if s != known]:
+    # half way from one pose, then on from another), each from its own base pose
+    for stages in (1, 2, 3):
         values = np.linspace(now, goal, stages + 1)
         done = 0
         for start, end in zip(values[:-1], values[1:], strict=True):
@@ -324,7 +342,6 @@ def _move_container(ctx: RobotContext, name: str, target: str, arms: Sequence[st
                 break
             done += 1
         if done == stages:
-            ctx.world.cache[key] = stages
             if target == "open" and name not in ctx.opened:
                 ctx.opened.append(name)
             elif target == "close" and name in ctx.opened:
@@ -421,6 +438,21 @@ def container_at(ctx: RobotContext, point: Vec3,
         if x0 <= local[0] <= x1 and y0 <= local[1] <= y1 and z0 - 0.02 <= local[2] <= z1:
             return container, tuple(local)
     return None, None
+
+
+@contextlib.contextmanager
+def virtually_open(ctx: RobotContext, container: Container) -> Iterator[None]:
+    """Plan as if the container were open (its joint and the base planner's map), without
+    opening it."""
+    with ctx.world.joint_at(container.joint, container.open_value):
+        saved = ctx.checker.occupancy
+        ctx.checker.occupancy = occupancy_map(ctx.world)
+        ctx.footprint_stale = True  # what sticks out, against the open container too
+        try:
+            yield
+        finally:
+            ctx.checker.occupancy = saved
+            ctx.footprint_stale = True
 
 
 def is_open(ctx: RobotContext, container: Container) -> bool:

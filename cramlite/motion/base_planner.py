@@ -37,6 +37,8 @@ class BasePlannerOptions:
     waypoint_turn_rad: float = MAX_BASE_TURN_RAD
     #: State-validity checking resolution, as a fraction of the space's extent.
     check_resolution: float = 0.002
+    #: The first try's resolution (the executed waypoints are all checked anyway).
+    coarse_check_resolution: float = 0.005
 
 
 @dataclass(frozen=True)
@@ -69,13 +71,21 @@ class BaseMotionPlanner:
         straight = self._interpolate([start, goal])
         if all(self.checker.is_free(*p) for p in straight):
             return BasePath(straight)
-        coarse = self._ompl(start, goal, int(rng.integers(1, 2**31 - 1)))
-        if coarse is None:
-            return None
-        waypoints = self._interpolate(coarse)  # every executed waypoint is checked
-        return BasePath(waypoints) if all(self.checker.is_free(*p) for p in waypoints) else None
+        seed = int(rng.integers(1, 2**31 - 1))
+        # OMPL checks its motions coarsely first; every executed waypoint is checked, and if
+        # one collides, planning is repeated with the fine resolution
+        for resolution in dict.fromkeys((self.options.coarse_check_resolution,
+                                         self.options.check_resolution)):
+            coarse = self._ompl(start, goal, seed, resolution)
+            if coarse is None:
+                return None
+            waypoints = self._interpolate(coarse)
+            if all(self.checker.is_free(*p) for p in waypoints):
+                return BasePath(waypoints)
+        return None
 
-    def _ompl(self, start: BasePose, goal: BasePose, seed: int) -> list[BasePose] | None:
+    def _ompl(self, start: BasePose, goal: BasePose, seed: int,
+              resolution: float) -> list[BasePose] | None:
         bounds_2d = self.checker.occupancy.bounds
         space = ob.SE2StateSpace()
         bounds = ob.RealVectorBounds(2)
@@ -87,7 +97,7 @@ class BaseMotionPlanner:
         si = ob.SpaceInformation(space)
         is_free = self.checker.is_free
         si.setStateValidityChecker(lambda s: is_free(s.getX(), s.getY(), s.getYaw()))
-        si.setStateValidityCheckingResolution(self.options.check_resolution)
+        si.setStateValidityCheckingResolution(resolution)
         si.setup()
         s, g = si.allocState(), si.allocState()
         s.setX(start[0]), s.setY(start[1]), s.setYaw(start[2])

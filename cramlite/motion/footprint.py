@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,6 +19,8 @@ from scipy import ndimage
 
 from cramlite.world.pr2 import PR2_BASE_HALF_SIZE_M
 
+#: Base poses whose answer a checker remembers at most (then it starts afresh).
+KNOWN_POSES = 200_000
 #: Links lower than this are floor, not obstacles.
 FLOOR_HEIGHT_M = 0.03
 
@@ -109,17 +111,25 @@ class FootprintChecker:
         self.outline = square_outline(half_size_m, outline_spacing_m)
         self.half_size_m = half_size_m
         self.carried_groups: list[tuple[np.ndarray, OccupancyMap, float]] = []
+        #: An exact check of what sticks out (robot links, carried objects) at a base pose,
+        #: consulted where the 2D outlines say blocked (see `set_carried`).
+        self.exact: Callable[[float, float, float], bool] | None = None
+        self._known: dict[tuple, bool] = {}
         self.checks = 0
         pad = occupancy.margin + occupancy.resolution
         self._sure_free = half_size_m * math.sqrt(2) + pad  # circumscribed circle clear
         self._sure_blocked = half_size_m - pad  # something inside the inscribed circle
 
     def set_carried(self, groups: Sequence[tuple[Sequence[Sequence[float]],
-                                                  OccupancyMap | None]]) -> None:
+                                                  OccupancyMap | None]],
+                    exact: Callable[[float, float, float], bool] | None = None) -> None:
         """What sticks out of the base while driving: groups of robot-frame xy points
         outlining a carried object or an arm's link, each with the map of what it can touch
-        at its height (None: the full map). Empty when nothing sticks out."""
+        at its height (None: the full map). Empty when nothing sticks out. `exact(x, y,
+        yaw)`: the precise check to consult where an outline touches the furniture."""
         pad = self.occupancy.margin + self.occupancy.resolution
+        self._known.clear()
+        self.exact = exact
         self.carried_groups = []
         for points, occupancy in groups:
             pts = np.asarray(points, dtype=float).reshape(-1, 2)
@@ -128,6 +138,18 @@ class FootprintChecker:
                                             float(np.hypot(*pts.T).max()) + pad))
 
     def is_free(self, x: float, y: float, yaw: float) -> bool:
+        """Is the robot clear of the world at this base pose? (Answers are remembered
+        until what the robot carries changes: location designators ask about the same
+        poses again and again.)"""
+        key = (id(self.occupancy), round(x, 5), round(y, 5), round(yaw, 5))
+        known = self._known.get(key)
+        if known is None:
+            if len(self._known) > KNOWN_POSES:
+                self._known.clear()
+            known = self._known[key] = self._is_free(x, y, yaw)
+        return known
+
+    def _is_free(self, x: float, y: float, yaw: float) -> bool:
         self.checks += 1
         clearance = self.occupancy.clearance_at(x, y)
         if clearance < self._sure_blocked:
@@ -142,5 +164,6 @@ class FootprintChecker:
             if clearance > reach:  # (the full map's clearance: no less than its own)
                 continue
             if occupancy.blocked_at(points @ rotation + (x, y)).any():
-                return False
+                # the outlines over-approximate an arm; the exact check decides, if given
+                return self.exact is not None and self.exact(x, y, yaw)
         return True

@@ -1,0 +1,215 @@
+"""Closed storage: drawers and a cupboard the PR2 opens and closes, stored items fetched
+and put back, the OPM's c made physical, the task tree, bad setup input."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cramlite.designators import MoveTorsoAction, ParkArmsAction, simulated_robot
+from cramlite.designators.failures import PlanFailure
+from cramlite.designators.storage import CloseAction, OpenAction
+from cramlite.trace import read_trace
+from cramlite.trace.replay import penetrations
+from cramlite.trial import TrialRunner
+from cramlite.world import World, load_setup
+from cramlite.world.bullet import p
+from tests.conftest import run_cli
+
+
+@pytest.fixture(scope="module")
+def c2_world():
+    with World.from_setup(load_setup("c2")) as world:
+        yield world
+
+
+def _handle_offsets(world: World, trace) -> list[float]:
+    """How far the gripper's tool frame is from the handle's grasp point in every state
+    where the container moves (from the trace, replayed in the world)."""
+    from cramlite.designators.storage import _grasp_pose
+    from cramlite.trace.replay import apply_state
+
+    joints, world_joints = trace.header["joints"], trace.header["world_joints"]
+    out = []
+    previous = None
+    for state in trace.states:
+        if previous is not None and state["w"] != previous["w"]:
+            apply_state(world, joints, state, world_joints)
+            moving = [world_joints[i] for i, (a, b) in enumerate(zip(state["w"], previous["w"],
+                                                                       strict=True)) if a != b]
+            container = next(c for c in world.containers.values() if c.joint == moving[0])
+            grasp = _grasp_pose(world, container).translation
+            out.append(min(math.dist(world.robot.link_pose(f"{arm}_gripper_tool_frame")[0],
+                                     grasp) for arm in "lr"))  # the hand on the handle
+        previous = state
+    return out
+
+
+def test_open_and_close_each_container(c2_world, tmp_path: Path) -> None:
+    world = c2_world
+    spoon_before = world.objects["spoon"].position()
+    with simulated_robot(world, seed=0) as ctx:
+        trace = tmp_path / "open-close.jsonl"
+        ctx.open_trace(trace, "c2", "test", "none", 0)
+        ParkArmsAction().perform(ctx)
+        MoveTorsoAction(0.25).perform(ctx)
+        for name, container in world.containers.items():
+            OpenAction(name).perform(ctx)
+            lower, upper = p.getJointInfo(world.environment, world.world_joints[container.joint],
+                                          physicsClientId=world.client)[8:10]
+            value = world.world_joint_positions()[container.joint]
+            print(name, "open at", value, "limits", lower, upper)
+            assert value == pytest.approx(container.open_value, abs=1e-6)
+            assert (lower, container.open_value) == pytest.approx((0.0, upper))  # its limits
+            if name == "drawer_1":  # the spoon inside rode along with the drawer
+                moved = np.subtract(world.objects["spoon"].position(), spoon_before)
+                assert moved == pytest.approx((-container.open_value, 0, 0), abs=1e-3)
+            CloseAction(name).perform(ctx)
+            assert world.world_joint_positions()[container.joint] == pytest.approx(0, abs=1e-6)
+        assert world.objects["spoon"].position() == pytest.approx(spoon_before, abs=1e-3)
+        ctx.trace.close()
+        opened = [n for root in ctx.tasks.roots for n in root.walk()
+                  if n.name in ("OpenAction", "CloseAction")]
+        assert [n.status for n in opened] == ["succeeded"] * 6
+        assert all(n.end_s - n.start_s > 1.0 for n in opened)  # it takes robot time
+    recorded = read_trace(trace)
+    assert recorded.header["world_joints"] == list(world.world_joints)
+    offsets = _handle_offsets(world, recorded)
+    print("tool to handle while it moves: max", max(offsets))
+    assert len(offsets) > 50 and max(offsets) < 0.02  # the arm stays on the handle's path
+    found = penetrations(recorded, world=world)
+    world.set_world_joints(dict.fromkeys(world.world_joints, 0.0))
+    assert found == [], [f.describe() for f in found]
+
+
+def test_opening_falls_through_when_the_first_accessing_pose_fails(c2_world) -> None:
+    from cramlite.designators.failures import NavigationFailed
+    from cramlite.designators.process_modules import SimulatedProcessModules
+
+    class FirstDriveRefused(SimulatedProcessModules):
+        def __init__(self, world):
+            super().__init__(world)
+            self.refused = 0
+
+        def execute_base_trajectory(self, trajectory, on_state=None):
+            if self.refused == 0:
+                self.refused += 1
+                raise NavigationFailed("a person is standing there (injected)")
+            super().execute_base_trajectory(trajectory, on_state)
+
+    world = c2_world
+    with simulated_robot(world, seed=1) as ctx:
+        ParkArmsAction().perform(ctx)
+        ctx.modules = FirstDriveRefused(world)
+        OpenAction("drawer_2").perform(ctx)
+        assert ctx.modules.refused == 1
+        assert world.world_joint_positions()["drawer_2_joint"] == pytest.approx(0.35)
+        CloseAction("drawer_2").perform(ctx)
+        print(ctx.log)
+        assert any("closed drawer_2" in line for line in ctx.log)
+
+
+def test_an_unknown_container_is_a_typed_failure(c2_world) -> None:
+    with simulated_robot(c2_world) as ctx, pytest.raises(PlanFailure, match="no container"):
+        OpenAction("oven").perform(ctx)
+
+
+@pytest.mark.parametrize("setup, strategy", [("c1", "opm"), ("c1", "baseline"),
+                                             ("c3", "opm")])
+def test_stored_items_are_fetched_and_every_container_is_closed_again(
+        setup: str, strategy: str, tmp_path: Path) -> None:
+    trace = tmp_path / "t.jsonl"
+    result = run_cli("run", setup, "--strategy", strategy, "--json", "--trace", str(trace))
+    data = json.loads(result.stdout)
+    print(data["order"], data["failures"])
+    assert result.returncode == 0 and data["success"]
+    assert data["open_close_s"] > 0
+    transports = [n for n in data["actions"] if n["name"] == "TransportAction"]
+    stored = {"c1": {"spoon", "bowl", "cup"}, "c3": {"milk", "bowl", "spoon"}}[setup]
+    for node in transports:
+        names = [c["name"] for c in node["children"]]
+        print(node["object"], names)
+        if node["object"] in stored:  # opened first; closed then (or by the plan's end)
+            assert names.index("OpenAction") < names.index("PickUpAction")
+        for child in node["children"]:
+            assert child["end_s"] >= child["start_s"] >= node["start_s"]
+    closes = [n for n in data["actions"] for n in [n, *n["children"]]
+              if n["name"] == "CloseAction"]
+    assert len(closes) >= 3
+    recorded = read_trace(trace)
+    assert recorded.states[-1]["w"] == [0.0, 0.0, 0.0]  # every container closed at the end
+    assert max(max(s["w"]) for s in recorded.states) > 0.3  # and they were open
+    found = penetrations(recorded)
+    assert found == [], [f.describe() for f in found]
+
+
+def test_clear_table_puts_stored_items_back() -> None:
+    with TrialRunner("c2") as runner:
+        result = runner.run("opm", plan="clear-table", seed=0)
+        positions = {n: runner.world.objects[n].position() for n in ("spoon", "cup")}
+        joints = runner.world.world_joint_positions()
+    print(result.order, result.failures, positions)
+    assert result.success, result.failures
+    setup = load_setup("c2")
+    for name in ("spoon", "cup"):
+        assert positions[name] == pytest.approx(setup.item(name).pose.xyz, abs=0.05)
+    assert all(abs(v) < 1e-6 for v in joints.values())
+
+
+def test_the_containment_factor_changes_the_opms_order_in_c1() -> None:
+    orders = {}
+    for c in ("1.0", "1.7"):
+        result = run_cli("run", "c1", "--strategy", "opm", "--params", f"c={c}", "--json")
+        data = json.loads(result.stdout)
+        assert data["success"], data["failures"]
+        orders[c] = data["order"]
+    print(orders)
+    assert orders["1.0"].index("cup") < orders["1.0"].index("breakfast-cereal")
+    assert orders["1.7"].index("breakfast-cereal") < orders["1.7"].index("cup")
+
+
+@pytest.mark.parametrize("old, new, field, message", [
+    ("    surface: counter\n", "    in: oven\n", "items[0].in", "unknown container 'oven'"),
+    ("    in: drawer_1\n    category: none\n    target: [-0.85",
+     "    in: drawer_2\n    category: none\n    target: [-0.85", "items[0].pose",
+     "does not fit in 'drawer_2'"),
+    ("    in: drawer_1\n", "    in: drawer_1\n    contained: false\n", "items[0].contained",
+     "follows from 'in:'"),
+    ("  - name: milk\n    type: milk\n    pose: [-0.85, 1.75, 0.86, 0.0]\n    surface: island\n",
+     "  - name: milk\n    type: milk\n    pose: [-0.85, 1.75, 0.86, 0.0]\n    surface: island\n"
+     "    contained: true\n", "items[4].contained", "follows from 'in:'"),
+    ("    in: drawer_1\n", "    in: drawer_1\n    surface: counter\n", "items[0].surface",
+     "not both"),
+])
+def test_bad_storage_input_exits_2_naming_the_field(tmp_path: Path, old: str, new: str,
+                                                   field: str, message: str) -> None:
+    text = (Path(__file__).resolve().parents[1] / "worlds" / "setups" / "c2.yaml").read_text()
+    if old == "    surface: counter\n":  # the first item of a copy of c1 instead
+        text = (Path(__file__).resolve().parents[1] / "worlds" / "setups" / "c1.yaml") \
+            .read_text().replace("    in: drawer_1\n", "    in: oven\n", 1)
+        old = new = ""
+    assert old in text
+    path = tmp_path / "bad.yaml"
+    path.write_text(text.replace(old, new, 1).replace("name: c2", "name: bad")
+                    .replace("name: c1", "name: bad"))
+    result = run_cli("show", str(path), "--out", str(tmp_path / "x.png"))
+    print(result.stderr)
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    assert field in result.stderr and message in result.stderr
+
+
+def test_kept_open_containers_are_closed_when_the_plan_ends(tmp_path: Path) -> None:
+    trace = tmp_path / "t.jsonl"
+    result = run_cli("run", "c2", "--keep-open", "--json", "--log", "--trace", str(trace))
+    data = json.loads(result.stdout)
+    assert data["success"], data["failures"]
+    recorded = read_trace(trace)
+    assert any(min(s["w"][:2]) > 0.3 for s in recorded.states)  # both drawers open at once
+    assert recorded.states[-1]["w"] == [0.0, 0.0, 0.0]
+    last_place = max(i for i, line in enumerate(data["log"]) if line.startswith("placed"))
+    closes = [i for i, line in enumerate(data["log"]) if line.startswith("closed")]
+    assert len(closes) == 2 and min(closes) > last_place  # by the plan, at its end
