@@ -47,6 +47,8 @@ class TrialResult:
     items: dict[str, dict[str, Any]] = field(default_factory=dict)
     #: The task tree: every action and motion with its robot-time span and status.
     actions: list[dict[str, Any]] = field(default_factory=list)
+    #: The driven base path, [[x, y], ...] within 1 cm (see cramlite.trace.path).
+    driven_path: list[list[float]] = field(default_factory=list)
     #: Arm motions executed, and how many of them OMPL planned (straight path blocked).
     arm_motions: int = 0
     planned_arm_motions: int = 0
@@ -113,8 +115,15 @@ class TrialRunner:
             wall_s=wall_s, drive_s=round(ctx.drive_s, 6), arm_s=round(ctx.arm_s, 6),
             robot_time_s=wall_s + ctx.drive_s + ctx.arm_s, items=items,
             open_close_s=round(time_in(actions, ("OpenAction", "CloseAction")), 6),
-            actions=actions, arm_motions=ctx.arm_motions,
+            actions=actions, driven_path=self._driven_path(ctx), arm_motions=ctx.arm_motions,
             planned_arm_motions=ctx.planned_motions, log=ctx.log)
+
+    def _driven_path(self, ctx: RobotContext) -> list[list[float]]:
+        from cramlite.trace.path import simplify_path
+
+        start = self.setup.robot_start
+        points = [np.array([[start.x, start.y]]), *ctx.driven_xy]
+        return simplify_path(np.concatenate(points))
 
     def setup_reference(self) -> str:
         """How a trace names this setup: its shipped name, or its file's absolute path."""

@@ -120,7 +120,7 @@ def _readme_rows() -> dict[str, str]:
     return rows
 
 
-@pytest.mark.parametrize("command", ["show", "run", "strategies", "order", "bench"])
+@pytest.mark.parametrize("command", ["show", "run", "strategies", "order", "bench", "report"])
 def test_readme_command_table_lists_every_option(command: str) -> None:
     rows = _readme_rows()
     assert command in rows, f"README has no row for {command}"

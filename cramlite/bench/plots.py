@@ -1,6 +1,11 @@
 """Batch plots (PNG): box plots of time and distance per setup and strategy and
 aggregated (the source's figures 4.3-4.6), and, with all orders, where each strategy
-falls among them. Needs matplotlib (`pip install cramlite[plots]`)."""
+falls among them. Needs matplotlib (`pip install cramlite[plots]`).
+
+Every box plot says what it shows: the legend names each strategy's colour and what the
+box (quartiles), the line (median), the triangle (mean), the whiskers and the circles
+(outliers) are, and each box is labelled with its n (successful trials).
+"""
 
 from __future__ import annotations
 
@@ -14,6 +19,23 @@ from cramlite.bench.specs import FIXED_ORDER
 
 LABELS = {"robot_time_s": "robot time (s): wall + driving + arm motion",
           "base_path_m": "driven base path (m)", "straight_line_m": "straight-line legs (m)"}
+#: Colours of the strategies, in sorted order (matplotlib's default cycle).
+PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
+           "#7f7f7f", "#bcbd22", "#17becf")
+#: What the parts of a box plot mean (the page's caption says the same).
+BOX_LEGEND = ("box: middle half of the trials (25-75 %)", "line: median",
+              "triangle: mean", "whiskers: up to 1.5 x the box height; circles beyond")
+
+
+BOX_STYLE: dict[str, Any] = {
+    "showmeans": True, "medianprops": {"color": "black", "linewidth": 1.5},
+    "meanprops": {"marker": "^", "markerfacecolor": "white", "markeredgecolor": "black"},
+    "flierprops": {"marker": "o", "markerfacecolor": "none", "markeredgecolor": "black"}}
+
+
+def strategy_colours(strategies: Sequence[str]) -> dict[str, str]:
+    """One colour per strategy (sorted by name, so every figure of a batch agrees)."""
+    return {s: PALETTE[i % len(PALETTE)] for i, s in enumerate(sorted(strategies))}
 
 
 def _values(rows, setup, strategy, measure) -> list[float]:
@@ -35,63 +57,97 @@ def write_plots(rows: Sequence[dict[str, Any]], folder: Path) -> list[Path]:
         import matplotlib.pyplot as plt
     except ImportError:
         return []
+    folder.mkdir(parents=True, exist_ok=True)
     written = []
     strategies = sorted({r["strategy"] for r in rows} - {FIXED_ORDER})
     setups = sorted({r["setup"] for r in rows})
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for measure in ("robot_time_s", "base_path_m"):
-        fig, ax = plt.subplots(figsize=(max(6.0, 1.4 * len(setups) * len(strategies)), 4.5))
-        positions, data, tick_pos = [], [], []
+    colours = strategy_colours(strategies)
+    for measure in ("robot_time_s", "base_path_m") if strategies else ():
+        fig, ax = plt.subplots(figsize=(max(7.0, 1.4 * len(setups) * len(strategies)), 4.8))
+        positions, data, tick_pos, owners = [], [], [], []
         width = 0.8 / max(1, len(strategies))
         for i, setup in enumerate(setups):
             for j, strategy in enumerate(strategies):
                 data.append(_values(rows, setup, strategy, measure))
                 positions.append(i + (j - (len(strategies) - 1) / 2) * width)
+                owners.append(strategy)
             tick_pos.append(i)
         boxes = ax.boxplot(data, positions=positions, widths=width * 0.9, patch_artist=True,
-                           showmeans=True)
-        for k, patch in enumerate(boxes["boxes"]):
-            patch.set_facecolor(colours[k % len(strategies) % len(colours)])
+                           **BOX_STYLE)
+        for patch, strategy in zip(boxes["boxes"], owners, strict=True):
+            patch.set_facecolor(colours[strategy])
             patch.set_alpha(0.6)
+        _label_n(ax, positions, data)
         ax.set_xticks(tick_pos, setups)
+        ax.set_xlabel("setup")
         ax.set_ylabel(LABELS[measure])
-        handles = [plt.Rectangle((0, 0), 1, 1, color=colours[j % len(colours)], alpha=0.6)
-                   for j in range(len(strategies))]
-        ax.legend(handles, strategies, loc="best")
-        ax.set_title(f"{LABELS[measure].split(' (')[0]} per setup and strategy")
+        _legend(ax, [(s, colours[s]) for s in strategies])
+        ax.set_title(f"{LABELS[measure].split(' (')[0]} per setup and strategy "
+                     "(successful trials; n per box above it)", pad=16)
         written.append(_save(fig, folder / f"{measure}_by_setup.png"))
 
-        fig, ax = plt.subplots(figsize=(2 + 1.5 * len(strategies), 4.5))
-        ax.boxplot([_values(rows, None, s, measure) for s in strategies],
-                   tick_labels=strategies, showmeans=True)
+        fig, ax = plt.subplots(figsize=(4.5 + 1.5 * len(strategies), 4.8))
+        data = [_values(rows, None, s, measure) for s in strategies]
+        boxes = ax.boxplot(data, tick_labels=strategies, patch_artist=True, **BOX_STYLE)
+        for patch, strategy in zip(boxes["boxes"], strategies, strict=True):
+            patch.set_facecolor(colours[strategy])
+            patch.set_alpha(0.6)
+        _label_n(ax, list(range(1, len(strategies) + 1)), data)
         ax.set_ylabel(LABELS[measure])
-        ax.set_title(f"all setups ({LABELS[measure].split(' (')[0]})")
+        _legend(ax, [])
+        ax.set_title(f"all setups ({LABELS[measure].split(' (')[0]})", pad=16)
         written.append(_save(fig, folder / f"{measure}_aggregated.png"))
 
     ordered = sorted({r["setup"] for r in rows if r["strategy"] == FIXED_ORDER})
     if ordered:
-        fig, axes = plt.subplots(1, len(ordered), figsize=(3.2 * len(ordered), 3.8),
+        fig, axes = plt.subplots(1, len(ordered), figsize=(3.4 * len(ordered) + 0.6, 3.9),
                                  squeeze=False)
         for ax, setup in zip(axes[0], ordered, strict=True):
             every = _values(rows, setup, FIXED_ORDER, "base_path_m")
-            ax.hist(every, bins=20, color="lightgrey", edgecolor="grey")
-            for j, strategy in enumerate(strategies):
+            ax.hist(every, bins=20, color="lightgrey", edgecolor="grey",
+                    label="all orders (fixed)")
+            for strategy in strategies:
                 mine = _values(rows, setup, strategy, "base_path_m")
                 if mine:
-                    ax.axvline(float(np.mean(mine)), color=colours[j % len(colours)], lw=2,
-                               label=strategy)
+                    ax.axvline(float(np.mean(mine)), color=colours[strategy], lw=2,
+                               label=f"{strategy} (mean of {len(mine)})")
             ax.set_title(f"{setup}: {len(every)} orders")
             ax.set_xlabel("driven base path (m)")
+            ax.legend(loc="best", fontsize=7)
         axes[0][0].set_ylabel("orders")
-        axes[0][-1].legend(loc="best")
         written.append(_save(fig, folder / "all_orders_base_path.png"))
     return written
+
+
+def _label_n(ax: Any, positions: Sequence[float], data: Sequence[Sequence[float]]) -> None:
+    """'n=K' under each box (K: the values in it)."""
+    transform = ax.get_xaxis_transform()
+    for x, values in zip(positions, data, strict=True):
+        ax.text(x, 1.01, f"n={len(values)}", transform=transform, ha="center", va="bottom",
+                fontsize=7, color="#444444")
+
+
+def _legend(ax: Any, strategies: Sequence[tuple[str, str]]) -> None:
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    handles = [plt.Rectangle((0, 0), 1, 1, facecolor=c, alpha=0.6, label=s)
+               for s, c in strategies]
+    handles += [plt.Rectangle((0, 0), 1, 1, facecolor="white", edgecolor="black",
+                              label=BOX_LEGEND[0]),
+                Line2D([], [], color="black", linewidth=1.5, label=BOX_LEGEND[1]),
+                Line2D([], [], marker="^", linestyle="none", markerfacecolor="white",
+                       markeredgecolor="black", label=BOX_LEGEND[2]),
+                Line2D([], [], marker="o", linestyle="none", markerfacecolor="none",
+                       markeredgecolor="black", label=BOX_LEGEND[3])]
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7,
+              frameon=False)
 
 
 def _save(fig: Any, path: Path) -> Path:
     import matplotlib.pyplot as plt
 
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, metadata={"Software": None})
     plt.close(fig)
     return path

@@ -23,7 +23,7 @@ from typing import Any
 COLUMNS = ["setup", "setup_hash", "plan", "strategy", "given_order", "trial", "seed",
            "batch_seed", "success", "order", "failures", "failure_types", "base_path_m",
            "straight_line_m", "wall_s", "drive_s", "arm_s", "open_close_s", "robot_time_s",
-           "items", "actions", "error_type", "error", "worker"]
+           "items", "actions", "driven_path", "error_type", "error", "worker"]
 #: Columns that measure time or place, and so differ between identical runs.
 TIMING_COLUMNS = ("wall_s", "robot_time_s", "worker")
 KEY_COLUMNS = ("setup", "setup_hash", "plan", "strategy", "given_order", "trial",

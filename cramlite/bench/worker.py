@@ -100,7 +100,8 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
                wall_s=result.wall_s, drive_s=result.drive_s, arm_s=result.arm_s,
                open_close_s=result.open_close_s, robot_time_s=result.robot_time_s,
                items=json.dumps(result.items),
-               actions=json.dumps(actions_only(result.actions), separators=(",", ":")))
+               actions=json.dumps(actions_only(result.actions), separators=(",", ":")),
+               driven_path=json.dumps(result.driven_path, separators=(",", ":")))
     return row
 
 
@@ -111,4 +112,5 @@ def base_row(spec: TrialSpec) -> dict[str, Any]:
             "success": False, "order": "", "failures": "[]", "failure_types": "",
             "base_path_m": "", "straight_line_m": "", "wall_s": "", "drive_s": "", "arm_s": "",
             "open_close_s": "", "robot_time_s": "", "items": "{}", "actions": "[]",
+            "driven_path": "[]",
             "error_type": "", "error": "", "worker": worker_name()}

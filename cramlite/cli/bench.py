@@ -197,7 +197,7 @@ def _run(args, strategies, setups, workers, out) -> int:
     if outcome.interrupted:
         progress.say(f"{'terminated' if outcome.stopped_now else 'interrupted'}; {len(rows)} "
                      f"of {total} trials are in {store.path}. Run the same command again to "
-                     "finish the rest.")
+                     f"finish the rest (`cramlite report {out}` shows what is there).")
         return EXIT_TERMINATED if outcome.stopped_now else 130
     summary = summarise(rows, {n: s.baseline_order for n, s in setups.items()})
     tests = [paired_tests(rows, s) for s in strategies if s != "baseline"] \
@@ -214,6 +214,13 @@ def _run(args, strategies, setups, workers, out) -> int:
     print(f"wrote {store.path}, {out / 'summary.csv'}, {out / 'summary.md'}"
           + (f", {len(plots)} plots" if plots else
              ("" if args.no_plots else " (no plots: pip install cramlite[plots])")))
+    from cramlite.report import build_report
+    from cramlite.report.build import DEFAULT_MAX_REPLAYS
+
+    page = build_report(out, figures=not args.no_plots, running=False,
+                        max_replays=0 if args.no_plots else DEFAULT_MAX_REPLAYS,
+                        say=progress.say)
+    print(f"report: {page.resolve()}", flush=True)
     return EXIT_OK if not failed else EXIT_PLAN_FAILED
 
 
@@ -222,7 +229,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "bench", help=command_help("bench"),
         description="Defaults reproduce the source's experiment: v1-v5 x {opm, baseline} x "
                     "10 trials. Results go to OUT/trials.csv (appended as trials finish), "
-                    "OUT/summary.csv|md and plots. Rerunning with the same --out resumes: "
+                    "OUT/summary.csv|md, plots and the report page OUT/report.html (see "
+                    "`cramlite report`; its path is the last line printed). Rerunning with "
+                    "the same --out resumes: "
                     "trials are matched by setup name and content hash, plan, strategy, "
                     "trial and seed; a folder holding another setup of the same name is "
                     "refused, and so is a folder another bench is writing into. Every setup "
@@ -264,7 +273,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     bench.add_argument("--plan", default="set-table", choices=PLAN_NAMES,
                        help="which plan (default set-table)")
     bench.add_argument("--out", default="results", help="results folder (default results)")
-    bench.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    bench.add_argument("--no-plots", action="store_true",
+                       help="skip the PNG plots (and the report's pictures and replays: it "
+                            "has tables only; `cramlite report OUT` draws them later)")
     bench.add_argument("--traces", action="store_true",
                        help="write each trial's trace to OUT/traces/SETUP-STRATEGY-TRIAL.jsonl "
                             "(replay them with `cramlite replay`)")

@@ -34,6 +34,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
                 "compare strategies on human sequences (Wilcoxon, Figure 3.18)"),
     "bench": ("cramlite.cli.bench",
               "run many trials (setups x strategies x trials) and summarise them"),
+    "report": ("cramlite.cli.report",
+               "the bench report page (DIR/report.html) from a results folder"),
 }
 #: Image files `show --out` and `run --image` can write (by suffix).
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")

@@ -35,13 +35,37 @@ def _save_image(image, path: str, option: str) -> str:
 
 def cmd_show(args: argparse.Namespace) -> int:
     from cramlite.world import World, load_setup
-    from cramlite.world.render import render
 
     setup = load_setup(args.setup)
+    if args.top:
+        return _show_top(setup, args)
+    from cramlite.world.render import render_labelled
+
     out = args.out or f"{setup.name}.png"
     with World.from_setup(setup) as world:
-        path = _save_image(render(world, args.width, args.height), out, "--out")
+        path = _save_image(render_labelled(world, args.width, args.height), out, "--out")
     print(f"wrote {path} ({setup.name}: {len(setup.items)} items)")
+    return EXIT_OK
+
+
+def _show_top(setup, args: argparse.Namespace) -> int:
+    """`show --top`: the top-down map (matplotlib)."""
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        raise UserInputError("the top-down map needs matplotlib: pip install "
+                             "'cramlite[plots]'", field="--top") from None
+    from cramlite.world.topdown import save_top_view
+
+    out = args.out or f"{setup.name}-top.png"
+    try:
+        path = save_top_view(setup, out, args.width, args.height)
+    except (OSError, ValueError) as exc:
+        reason = getattr(exc, "strerror", None) or str(exc)
+        raise UserInputError(f"cannot write the image ({reason})", source=out,
+                             field="--out") from None
+    print(f"wrote {path} ({setup.name} from above: {len(setup.items)} items, their targets "
+          "and the robot's start)")
     return EXIT_OK
 
 
@@ -113,15 +137,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     show = sub.add_parser("show", help=command_help("show"),
                           description="Loads and checks a setup (every mistake is reported as "
                                       "FILE: FIELD: what was expected, exit code 2) and draws "
-                                      "it with PyBullet's TinyRenderer; no display needed.")
+                                      "it with PyBullet's TinyRenderer, no display needed: "
+                                      "each item labelled, each target marked (red square) "
+                                      "and the robot's start (blue ring). --top draws the "
+                                      "kitchen from above instead (matplotlib).")
     show.add_argument("setup", metavar="SETUP", help=setup_help)
     show.add_argument("--out", type=image_path,
-                      help="image file to write: .png (default SETUPNAME.png), .jpg, .bmp, "
-                           ".tif")
+                      help="image file to write: .png (default SETUPNAME.png, with --top "
+                           "SETUPNAME-top.png), .jpg, .bmp, .tif")
     show.add_argument("--width", type=side, default=1024,
                       help=f"image width in pixels, 1-{MAX_IMAGE_SIDE} (default 1024)")
     show.add_argument("--height", type=side, default=768,
                       help=f"image height in pixels, 1-{MAX_IMAGE_SIDE} (default 768)")
+    show.add_argument("--top", action="store_true",
+                      help="draw the top-down map instead: furniture, drawers and cupboard, "
+                           "the robot's start, each item's start spot and target, labelled "
+                           "(needs matplotlib: pip install 'cramlite[plots]')")
     show.set_defaults(func=cmd_show)
 
     run = sub.add_parser("run", help=command_help("run"),

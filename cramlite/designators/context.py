@@ -135,6 +135,8 @@ class RobotContext:
     drive_s: float = 0.0
     arm_s: float = 0.0
     trace: TraceWriter | None = None
+    #: The xy positions of every executed base trajectory, in order (the driven path).
+    driven_xy: list[np.ndarray] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self.checker = FootprintChecker(occupancy_map(self.world))
@@ -174,6 +176,7 @@ class RobotContext:
         t0 = self.time_s
         self.modules.execute_base_trajectory(trajectory, self._observer(t0, trajectory.times))
         self.base_path_m += trajectory.length_m
+        self.driven_xy.append(np.asarray(trajectory.poses)[:, :2].copy())
         self.drive_s += trajectory.duration_s
 
     def move_joints(self, trajectory: JointTrajectory) -> None:

@@ -1,0 +1,153 @@
+"""Building the report: read the folder, draw the pictures into `DIR/report/`, write
+`DIR/report.html` (atomically: a browser never sees half a page)."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+from cramlite.bench.specs import FIXED_ORDER
+from cramlite.errors import UserInputError
+from cramlite.report.folder import BenchFolder, read_folder
+from cramlite.report.page import MEDIA, PageData, render_page
+from cramlite.report.trials import trial_id, trials_of_interest
+
+PAGE = "report.html"
+#: Default number of replay animations a report draws (each takes a few seconds).
+DEFAULT_MAX_REPLAYS = 12
+NO_MATPLOTLIB = "Pictures (plots, maps, timelines) need matplotlib: pip install 'cramlite[plots]'."
+
+
+def build_report(folder: str | Path, *, figures: bool = True,
+                 max_replays: int = DEFAULT_MAX_REPLAYS, speed: float | None = None,
+                 running: bool | None = None,
+                 say: Callable[[str], None] | None = None) -> Path:
+    """Write DIR/report.html (and its pictures in DIR/report/); returns the page's path.
+    `figures`: draw pictures (needs matplotlib); `max_replays`: at most this many replay
+    GIFs of traced trials; `running`: whether a bench is still filling the folder (None:
+    ask its lock)."""
+    from cramlite.bench.plots import strategy_colours
+    from cramlite.bench.summary import order_percentiles, paired_tests, summarise
+    from cramlite.report.replays import DEFAULT_SPEED
+
+    data = read_folder(folder, running=running)
+    rows = data.rows
+    baseline = {n: tuple(s.baseline_order) for n, s in data.setups.items() if s is not None}
+    summary = summarise(rows, baseline)
+    tests = ([paired_tests(rows, s) for s in data.strategies if s != "baseline"]
+             if "baseline" in {r["strategy"] for r in rows} else [])
+    page = PageData(data, summary, [t for t in tests if t["pairs"]],
+                    order_percentiles(rows), strategy_colours(data.strategies), baseline)
+    page.interest, page.failed_left_out = trials_of_interest(rows)
+    media = data.path / MEDIA
+    try:
+        media.mkdir(exist_ok=True)
+    except OSError as exc:
+        raise UserInputError(f"cannot write the report's pictures ({exc.strerror or exc})",
+                             source=str(media)) from None
+    written: set[str] = set()
+    if not figures:
+        page.figures_note = ("Pictures skipped (--no-plots); `cramlite report DIR` draws "
+                             "them.")
+    elif not _have_matplotlib():
+        page.figures_note = NO_MATPLOTLIB
+    else:
+        _pictures(data, page, media, written, say)
+    if max_replays > 0:
+        _replays(data, page, media, written, max_replays, speed or DEFAULT_SPEED, say)
+    _tidy(media, written)
+    out = data.path / PAGE
+    partial = data.path / f"{PAGE}.{os.getpid()}.part"  # two builds at once never mix
+    try:
+        partial.write_text(render_page(page), encoding="utf-8")
+        os.replace(partial, out)
+    except OSError as exc:
+        raise UserInputError(f"cannot write the report ({exc.strerror or exc})",
+                             source=str(out)) from None
+    return out
+
+
+def _have_matplotlib() -> bool:
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _pictures(data: BenchFolder, page: PageData, media: Path, written: set[str],
+              say: Callable[[str], None] | None) -> None:
+    from cramlite.bench.plots import write_plots
+    from cramlite.report.figures import setup_map, timeline
+    from cramlite.world.topdown import load_layout
+
+    captions = {"robot_time_s_by_setup.png": "Robot time per setup and strategy.",
+                "base_path_m_by_setup.png": "Driven base path per setup and strategy.",
+                "robot_time_s_aggregated.png": "Robot time, all setups together.",
+                "base_path_m_aggregated.png": "Driven base path, all setups together."}
+    for path in write_plots(data.rows, media):
+        written.add(path.name)
+        if path.name in captions:
+            page.plots.append((path.name, captions[path.name]))
+        else:
+            page.all_orders_plot = path.name
+    for name in data.setup_names:
+        setup = data.setups[name]
+        if setup is None:
+            continue
+        try:
+            layout = load_layout(setup)
+        except UserInputError as exc:
+            page.map_notes[name] = f"no map: {exc}"
+            continue
+        rows = [r for r in data.rows if r["setup"] == name and r["strategy"] != FIXED_ORDER]
+        highlighted = {}
+        for row in rows:
+            best = highlighted.get(row["strategy"])
+            if best is None or int(row["trial"]) < int(best["trial"]):
+                highlighted[row["strategy"]] = row
+        file = f"map-{name}.png"
+        setup_map(layout, rows, data.strategies, page.colours, highlighted, media / file)
+        page.maps[name] = file
+        written.add(file)
+    if say:
+        say(f"report: drawing {len(page.interest)} timelines")
+    for row in page.interest:
+        file = f"timeline-{trial_id(row)}.png"
+        timeline(row, media / file)
+        page.timelines[trial_id(row)] = file
+        written.add(file)
+
+
+def _replays(data: BenchFolder, page: PageData, media: Path, written: set[str],
+             max_replays: int, speed: float, say: Callable[[str], None] | None) -> None:
+    from cramlite.report.replays import ensure_replay, replay_name
+
+    traced = [(r, data.trace(r)) for r in page.interest]
+    traced = [(r, t) for r, t in traced if t is not None]
+    if say and traced:
+        say(f"report: {min(len(traced), max_replays)} replay animations (kept between builds)")
+    for k, (row, trace) in enumerate(traced):
+        tid = trial_id(row)
+        if k >= max_replays:
+            page.replay_notes[tid] = (f"replay not drawn (the report draws at most "
+                                      f"{max_replays}; raise --max-replays, or `cramlite "
+                                      f"replay {trace} --out FILE.gif`)")
+            continue
+        file = replay_name(tid, speed)
+        problem = ensure_replay(trace, media / file, speed)
+        if problem:
+            page.replay_notes[tid] = problem
+        else:
+            page.replays[tid] = file
+            written.add(file)
+
+
+def _tidy(media: Path, written: set[str]) -> None:
+    """Remove the pictures of earlier builds that this page does not show."""
+    for path in media.iterdir():
+        if path.is_file() and path.name not in written and \
+                path.suffix in (".png", ".gif", ".part"):
+            path.unlink(missing_ok=True)
+

@@ -1,0 +1,214 @@
+"""Reading a bench results folder for the report: rows, metadata, setups, traces, status.
+
+Works on a folder still being filled (a line cut short is left out) or interrupted, and on
+folders of older versions as long as the columns the report needs are there. A folder
+that is not a bench folder, holds no finished trial or has a malformed file is refused
+with a `UserInputError` naming the file (and line and column) and what was expected.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from cramlite.bench.specs import FIXED_ORDER
+from cramlite.errors import UserInputError
+
+#: Columns the report cannot do without; the others default to empty.
+REQUIRED = ("setup", "strategy", "trial", "success", "order")
+#: Columns holding JSON, and what each must be.
+JSON_COLUMNS = {"failures": list, "items": dict, "actions": list, "driven_path": list}
+NOT_A_BENCH = "expected a results folder written by `cramlite bench --out DIR`"
+
+
+@dataclass
+class BenchFolder:
+    """What the report shows, read from a results folder."""
+
+    path: Path
+    rows: list[dict[str, Any]]  #: trials.csv, JSON columns parsed, in file order
+    metadata: dict[str, Any]
+    setups: dict[str, Any]  #: setup name -> Setup (None: could not be loaded)
+    setup_notes: dict[str, str] = field(default_factory=dict)
+    strategies: list[str] = field(default_factory=list)  #: sorted, without fixed-order
+    planned: int | None = None  #: trials the last bench command runs in all
+    planned_done: int = 0  #: of them, how many are in the folder
+    running: str = ""  #: who holds the folder's lock (a bench still filling it), or ""
+
+    @property
+    def setup_names(self) -> list[str]:
+        return sorted(self.setups)
+
+    def trace(self, row: dict[str, Any]) -> Path | None:
+        path = self.path / "traces" / f"{row['setup']}-{row['strategy']}-{row['trial']}.jsonl"
+        return path if path.is_file() and path.stat().st_size > 0 else None
+
+
+def read_folder(path: str | Path, running: bool | None = None) -> BenchFolder:
+    """Read a bench folder; `running`: whether a bench is still writing into it (None:
+    find out from its lock)."""
+    folder = Path(path)
+    src = str(folder)
+    if not folder.exists():
+        raise UserInputError(f"no such folder; {NOT_A_BENCH}", source=src)
+    if not folder.is_dir():
+        raise UserInputError(f"is a file; {NOT_A_BENCH}", source=src)
+    csv_path, meta_path = folder / "trials.csv", folder / "metadata.json"
+    if not csv_path.exists() and not meta_path.exists():
+        raise UserInputError(f"holds no trials.csv or metadata.json; {NOT_A_BENCH}",
+                             source=src)
+    metadata = _metadata(meta_path)
+    rows = _rows(csv_path)
+    if not rows:
+        raise UserInputError("no finished trial yet; expected at least one row (rerun the "
+                             "report once the bench has finished a trial)",
+                             source=str(csv_path))
+    arguments = metadata.get("arguments") if isinstance(metadata.get("arguments"), dict) \
+        else {}
+    strategies = set(_names(arguments.get("strategies"))) | {r["strategy"] for r in rows}
+    result = BenchFolder(folder, rows, metadata, {},
+                         strategies=sorted(strategies - {FIXED_ORDER}))
+    _load_setups(result, arguments)
+    _planned(result, arguments)
+    result.running = "" if running is False else _lock_holder(folder)
+    return result
+
+
+def _metadata(path: Path) -> dict[str, Any]:
+    if not path.exists():
+        return {}
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise UserInputError(f"not valid JSON ({type(exc).__name__}); expected the metadata "
+                             "`cramlite bench` writes", source=str(path)) from None
+    if not isinstance(data, dict):
+        raise UserInputError("expected a JSON object", source=str(path))
+    return data
+
+
+def _rows(path: Path) -> list[dict[str, Any]]:
+    if not path.exists():
+        return []
+    src = str(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise UserInputError("not UTF-8 text; expected the CSV `cramlite bench` writes",
+                             source=src) from None
+    reader = csv.DictReader(text.splitlines(keepends=True))
+    header = reader.fieldnames or []
+    if not header:
+        return []
+    missing = [c for c in REQUIRED if c not in header]
+    if missing:
+        raise UserInputError(f"has no column {', '.join(missing)}; expected the columns "
+                             "`cramlite bench` writes", source=src, field="line 1")
+    rows = []
+    for number, row in enumerate(reader, start=2):
+        if None in row or any(row.get(c) is None for c in header):
+            continue  # a line cut short by a kill, or being written
+        for column, kind in JSON_COLUMNS.items():
+            cell = row.get(column) or ("[]" if kind is list else "{}")
+            try:
+                value = json.loads(cell)
+            except json.JSONDecodeError:
+                value = None
+            if not isinstance(value, kind):
+                raise UserInputError(f"{column}: expected a JSON {kind.__name__}, got "
+                                     f"{cell[:40]!r}", source=src, field=f"line {number}")
+            row[column] = value
+        if not row["trial"].isdigit():
+            raise UserInputError(f"trial: expected a whole number, got {row['trial']!r}",
+                                 source=src, field=f"line {number}")
+        rows.append(row)
+    return rows
+
+
+def _names(text: Any) -> list[str]:
+    return [p.strip() for p in str(text or "").split(",") if p.strip()]
+
+
+def _load_setups(folder: BenchFolder, arguments: dict[str, Any]) -> None:
+    """Each setup of the rows (and of the bench's arguments), from the folder's own
+    random setups, the paths the bench was given or the shipped ones; the one whose
+    content hash matches the rows."""
+    from cramlite.world.setup import load_setup
+
+    candidates: dict[str, list[Any]] = {}
+    sources = [str(p) for p in sorted((folder.path / "setups").glob("*.yaml"))] + \
+        _names(arguments.get("setups"))
+    for source in sources:
+        try:
+            setup = load_setup(source)
+        except UserInputError:
+            continue
+        candidates.setdefault(setup.name, []).append(setup)
+    hashes = {r["setup"]: r.get("setup_hash", "") for r in folder.rows}
+    for name in sorted(set(hashes) | set(candidates)):
+        found = list(candidates.get(name, []))
+        if not found:
+            with contextlib.suppress(UserInputError):
+                found.append(load_setup(name))
+        wanted = hashes.get(name, "")
+        match = next((s for s in found if not wanted or s.content_hash == wanted), None)
+        if match is None and found:
+            match = found[0]
+            folder.setup_notes[name] = (f"the setup file changed since the bench ran (content "
+                                        f"hash {match.content_hash}, the trials' is {wanted}): "
+                                        "the map shows it as it is now")
+        elif match is None:
+            folder.setup_notes[name] = "its setup file was not found: no map"
+        folder.setups[name] = match
+
+
+def _planned(folder: BenchFolder, arguments: dict[str, Any]) -> None:
+    """How many trials the last bench command runs, and how many of them are done."""
+    try:
+        trials = int(arguments["trials"])
+        strategies = _names(arguments["strategies"])
+    except (KeyError, TypeError, ValueError):
+        return
+    names = [s.name for s in folder.setups.values() if s is not None
+             and (s.name in _names(arguments.get("setups")) or
+                  str(s.source) in _names(arguments.get("setups")) or
+                  s.source.parent == folder.path / "setups")]
+    names = sorted(set(names))
+    total = len(names) * len(strategies) * trials
+    if arguments.get("all_orders"):
+        total += sum(math.factorial(len(folder.setups[n].items)) for n in names)
+    done = {(r["setup"], r["strategy"], r["trial"], r.get("given_order", ""))
+            for r in folder.rows if r["setup"] in names
+            and (r["strategy"] == FIXED_ORDER or (r["strategy"] in strategies
+                                                  and int(r["trial"]) < trials))}
+    folder.planned, folder.planned_done = total, min(len(done), total)
+
+
+def _lock_holder(folder: Path) -> str:
+    """Who holds the bench lock of the folder ("" when no bench is writing into it)."""
+    from cramlite.bench.lock import LOCK_NAME
+
+    path = folder / LOCK_NAME
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        return ""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return ""
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return os.read(fd, 4096).decode("utf-8", "replace").strip() or "another process"
+        fcntl.flock(fd, fcntl.LOCK_UN)
+        return ""
+    finally:
+        os.close(fd)

@@ -1,0 +1,406 @@
+"""The report page: one HTML file, inline CSS, no script, no network; its pictures are
+files in the `report/` folder beside it (relative links)."""
+
+from __future__ import annotations
+
+import html
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from cramlite.bench.plots import BOX_LEGEND
+from cramlite.bench.specs import FIXED_ORDER
+from cramlite.bench.summary import MEASURES
+from cramlite.report.folder import BenchFolder
+from cramlite.report.trials import failure_text, ok, orders, steps, trial_id
+
+MEDIA = "report"  #: folder of the pictures, beside report.html
+
+CSS = """
+body{font:14px/1.45 system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;color:#222;
+margin:0 auto;max-width:1280px;padding:0 20px 40px}
+h1{font-size:24px;margin:18px 0 4px}h2{font-size:20px;margin:32px 0 8px;
+border-bottom:2px solid #ddd;padding-bottom:3px}h3{font-size:16px;margin:22px 0 6px}
+h4{font-size:14px;margin:14px 0 4px}
+nav{background:#f5f5f5;padding:8px 12px;border-radius:6px;margin:10px 0}
+nav a{margin-right:12px;white-space:nowrap}
+table{border-collapse:collapse;margin:6px 0 12px;font-size:13px}
+th,td{border:1px solid #ddd;padding:3px 7px;text-align:left;vertical-align:top}
+th{background:#f0f0f0}td.n{text-align:right;font-variant-numeric:tabular-nums}td.s{white-space:nowrap}
+tr.fail td{background:#fdecea}
+.status{padding:8px 12px;border-radius:6px;margin:8px 0}
+.complete{background:#e8f5e9}.incomplete{background:#fff4e5}
+.note{color:#555;font-size:13px}.bad{color:#b71c1c}
+.chip{display:inline-block;width:11px;height:11px;border-radius:2px;margin-right:5px;
+vertical-align:-1px}
+img{max-width:100%;height:auto;border:1px solid #eee}
+figure{margin:8px 0 16px}figcaption{font-size:12.5px;color:#444;max-width:1000px}
+.trial{border:1px solid #ddd;border-radius:6px;padding:4px 14px 10px;margin:14px 0}
+.trial.failed{border-color:#e57373}
+.cols{display:flex;flex-wrap:wrap;gap:24px}.cols>div{flex:1 1 380px}
+.order{font-family:ui-monospace,Menlo,Consolas,monospace;font-size:12.5px}
+details>summary{cursor:pointer;color:#1a5fb4}
+.failure{background:#fdecea;border-left:4px solid #d62728;padding:4px 10px;margin:6px 0;
+font-size:13px;word-break:break-word}
+"""
+
+
+@dataclass
+class PageData:
+    """Everything the page shows; pictures are file names in MEDIA ("" when absent)."""
+
+    folder: BenchFolder
+    summary: list[dict[str, Any]]
+    tests: list[dict[str, Any]]
+    percentiles: list[dict[str, Any]]
+    colours: dict[str, str]
+    baseline_orders: dict[str, Sequence[str]]
+    plots: list[tuple[str, str]] = field(default_factory=list)  #: (file, caption)
+    all_orders_plot: str = ""
+    maps: dict[str, str] = field(default_factory=dict)  #: setup -> file
+    map_notes: dict[str, str] = field(default_factory=dict)
+    interest: list[dict[str, Any]] = field(default_factory=list)
+    failed_left_out: int = 0
+    timelines: dict[str, str] = field(default_factory=dict)  #: trial id -> file
+    replays: dict[str, str] = field(default_factory=dict)  #: trial id -> file
+    replay_notes: dict[str, str] = field(default_factory=dict)
+    figures_note: str = ""  #: why there are no pictures ("" when there are)
+
+
+def e(value: Any) -> str:
+    return html.escape(str(value), quote=True)
+
+
+def num(value: Any, digits: int = 2) -> str:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return "–"
+    return "–" if not math.isfinite(number) else f"{number:.{digits}f}"
+
+
+def img(file: str, alt: str) -> str:
+    """A picture of the media folder, linked to itself (click: full size)."""
+    src = f"{MEDIA}/{e(file)}"
+    return f'<a href="{src}"><img src="{src}" alt="{e(alt)}" loading="lazy"></a>'
+
+
+def chip(colour: str) -> str:
+    return f'<span class="chip" style="background:{e(colour)}"></span>'
+
+
+def order_html(order: str) -> str:
+    names = order.split()
+    if not names:
+        return '<span class="note">no item fetched</span>'
+    return '<span class="order">' + " → ".join(f"{k}&nbsp;{e(n)}" for k, n in
+                                              enumerate(names, 1)) + "</span>"
+
+
+def render_page(data: PageData) -> str:
+    folder = data.folder
+    setups = folder.setup_names
+    parts = [f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+             f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
+             f"<title>cramlite bench report: {e(folder.path.name)}</title>"
+             f"<style>{CSS}</style></head><body>",
+             f"<h1>Bench report: {e(folder.path.name)}</h1>", _status(data)]
+    links = [("run", "Run"), ("summary", "Summary"), ("tests", "Tests"), ("plots", "Plots")]
+    links += [(f"setup-{s}", f"Setup {s}") for s in setups]
+    if data.percentiles or data.all_orders_plot:
+        links.append(("all-orders", "All orders"))
+    links.append(("failures", "Failures"))
+    parts.append("<nav>" + "".join(f'<a href="#{e(a)}">{e(t)}</a>' for a, t in links)
+                 + "</nav>")
+    parts += [_run(folder), _summary(data), _tests(data), _plots(data)]
+    parts += [_setup(data, s) for s in setups]
+    parts += [_all_orders(data), _failures(data), "</body></html>\n"]
+    return "\n".join(p for p in parts if p)
+
+
+def _status(data: PageData) -> str:
+    folder = data.folder
+    rows = folder.rows
+    failed = sum(not ok(r) for r in rows)
+    counts = f"{len(rows)} trial{'s' * (len(rows) != 1)} in trials.csv, {failed} failed"
+    if folder.running:
+        return (f'<p class="status incomplete">Incomplete: a bench is still writing into this '
+                f'folder ({e(folder.running)}); {e(counts)}'
+                + (f" ({folder.planned_done} of the {folder.planned} it runs)"
+                   if folder.planned else "")
+                + ". Run <code>cramlite report DIR</code> again for the rest.</p>")
+    if folder.planned is not None and folder.planned_done < folder.planned:
+        return (f'<p class="status incomplete">Incomplete: {folder.planned_done} of the '
+                f"{folder.planned} trials of the last bench command are here ({e(counts)}); "
+                "it was interrupted. Run the same command again to finish, then "
+                "<code>cramlite report DIR</code>.</p>")
+    return f'<p class="status complete">Complete: {e(counts)}.</p>'
+
+
+def _run(folder: BenchFolder) -> str:
+    meta = folder.metadata
+    arguments = meta.get("arguments") if isinstance(meta.get("arguments"), dict) else {}
+    params = "".join(f"<tr><th>{e(k)}</th><td>{e(v)}</td></tr>"
+                     for k, v in arguments.items() if k != "command")
+    versions = meta.get("versions") if isinstance(meta.get("versions"), dict) else {}
+    libs = "".join(f"<tr><th>{e(k)}</th><td>{e(v)}</td></tr>" for k, v in versions.items())
+    runs = meta.get("runs") if isinstance(meta.get("runs"), list) else []
+    facts = [("bench started", meta.get("written", "–")), ("python", meta.get("python", "–")),
+             ("platform", meta.get("platform", "–")), ("executor", meta.get("executor", "–")),
+             ("bench commands into this folder", len(runs) or "–")]
+    env = "".join(f"<tr><th>{e(k)}</th><td>{e(v)}</td></tr>" for k, v in facts)
+    if not meta:
+        return ('<h2 id="run">Run</h2><p class="note">No metadata.json in the folder: run '
+                "parameters and library versions unknown.</p>")
+    return (f'<h2 id="run">Run</h2><div class="cols"><div><h4>Parameters (last bench '
+            f"command)</h4><table>{params}</table></div><div><h4>Library versions</h4>"
+            f"<table>{libs}</table><table>{env}</table></div></div>")
+
+
+def _summary(data: PageData) -> str:
+    head = ("<tr><th>setup</th><th>strategy</th><th>trials</th><th>success</th>"
+            "<th>robot time s<br>mean / median</th><th>driving s</th><th>arm s</th>"
+            "<th>driven path m<br>mean / median</th><th>straight-line m</th>"
+            "<th>edit distance to baseline</th><th>most frequent order</th></tr>")
+    body = []
+    for entry in data.summary:
+        ok_trials = round(entry["success_rate"] * entry["trials"])
+        cls = ' class="fail"' if ok_trials < entry["trials"] else ""
+        body.append(
+            f"<tr{cls}><td><a href=\"#setup-{e(entry['setup'])}\">{e(entry['setup'])}</a></td>"
+            f"<td class=s>{chip(data.colours.get(entry['strategy'], '#999'))}"
+            f"{e(entry['strategy'])}"
+            f"</td><td class=n>{entry['trials']}</td>"
+            f"<td class=n>{ok_trials}/{entry['trials']} ({entry['success_rate']:.0%})</td>"
+            f"<td class=n>{num(entry['robot_time_s_mean'])} / "
+            f"{num(entry['robot_time_s_median'])}</td>"
+            f"<td class=n>{num(entry['drive_s_mean'])}</td>"
+            f"<td class=n>{num(entry['arm_s_mean'])}</td>"
+            f"<td class=n>{num(entry['base_path_m_mean'])} / "
+            f"{num(entry['base_path_m_median'])}</td>"
+            f"<td class=n>{num(entry['straight_line_m_mean'])}</td>"
+            f"<td class=n>{num(entry['edit_vs_baseline'])}</td>"
+            f"<td>{order_html(entry['order'])}</td></tr>")
+    if not body:
+        return '<h2 id="summary">Summary</h2><p class="note">No trials of a strategy yet.</p>'
+    return ('<h2 id="summary">Summary</h2><table>' + head + "".join(body) + "</table>"
+            '<p class="note">Times, paths and distances are means (and medians) over the '
+            "successful trials. Robot time = wall time (planning and simulation) + driving "
+            "time (base at 1.0 m/s, 1 rad/s) + arm time (arm, torso and gripper motion). "
+            "Driven path: length of the base paths actually executed; straight-line: sum of "
+            "the straight legs robot → item → target. Edit distance: normalised "
+            "Damerau-Levenshtein distance of the most frequent order to the setup's baseline "
+            "order (0 = the same order, 1 = nothing in common).</p>")
+
+
+def _tests(data: PageData) -> str:
+    if not data.tests:
+        return ('<h2 id="tests">Statistical tests</h2><p class="note">None: the paired tests '
+                "compare each strategy with <code>baseline</code>, and this folder holds no "
+                "baseline trials (or no other strategy).</p>")
+    rows = []
+    for test in data.tests:
+        for measure in MEASURES[1:]:
+            t = test.get(measure, {})
+            per = t.get("per_setup")
+            rows.append(
+                f"<tr><td>{e(test['strategy'])} vs {e(test['reference'])}</td>"
+                f"<td>{e(measure)}</td><td class=n>{test['pairs']}</td>"
+                f"<td class=n>{num(t.get('mean'))}</td><td class=n>"
+                f"{num(t.get('reference_mean'))}</td><td class=n>{num(t.get('W'), 1)}</td>"
+                f"<td class=n>{_p(t.get('p'))}</td><td>"
+                + (f"n={per['n']}, W={num(per['W'], 1)}, p={_p(per['p'])}" if per else
+                   e(t.get("note", "–") if t.get("p") is None else "–"))
+                + "</td></tr>")
+    return ('<h2 id="tests">Statistical tests</h2><p class="note">Wilcoxon signed-rank test '
+            "of each strategy against baseline, paired by setup and trial (the same seed), "
+            "on the successful pairs; and on the per-setup means (n = number of setups), "
+            "as the source compared them. p &lt; 0.05: the difference is unlikely to be "
+            "chance.</p><table><tr><th>comparison</th><th>measure</th><th>pairs</th>"
+            "<th>mean</th><th>baseline mean</th><th>W</th><th>p</th><th>per-setup means"
+            "</th></tr>" + "".join(rows) + "</table>")
+
+
+def _p(value: Any) -> str:
+    return "–" if value is None else f"{float(value):.3g}"
+
+
+def _plots(data: PageData) -> str:
+    if data.figures_note:
+        return f'<h2 id="plots">Plots</h2><p class="note">{e(data.figures_note)}</p>'
+    legend = "; ".join(BOX_LEGEND)
+    figures = "".join(f"<figure>{img(f, c)}<figcaption>{e(c)} Successful trials only; "
+                      f"{e(legend)}; n above each box: the trials in it.</figcaption></figure>"
+                      for f, c in data.plots)
+    return f'<h2 id="plots">Plots</h2>{figures}'
+
+
+def _setup(data: PageData, name: str) -> str:
+    folder = data.folder
+    setup = folder.setups.get(name)
+    rows = [r for r in folder.rows if r["setup"] == name]
+    parts = [f'<h2 id="setup-{e(name)}">Setup {e(name)}</h2>']
+    if setup is not None and setup.description:
+        parts.append(f"<p>{e(setup.description)}</p>")
+    if setup is not None:
+        baseline_order = " ".join(data.baseline_orders.get(name, ()))
+        parts.append(f'<p class="note">Baseline order: {order_html(baseline_order)}</p>')
+    note = folder.setup_notes.get(name) or data.map_notes.get(name)
+    if note:
+        parts.append(f'<p class="note bad">{e(note)}</p>')
+    if name in data.maps:
+        parts.append(f"<figure>{img(data.maps[name], f'top-down map of {name}')}<figcaption>"
+                     "The kitchen from above, one panel per strategy: every trial's driven base "
+                     "path (faint), the first trial's in bold with arrows in the direction of "
+                     "travel, the numbers at the items the order it fetched them in; red cross: "
+                     "an item (or drawer, cupboard) a failed trial could not fetch, place, open "
+                     "or close. Items (●) start where their name is, "
+                     "targets (□) are where they go.</figcaption></figure>")
+    parts.append("<h3>Orders chosen</h3>")
+    table = ["<table><tr><th>strategy</th><th>order</th><th>trials</th><th>failed</th>"
+             "<th>edit distance to baseline</th></tr>"]
+    from cramlite.evaluation.metrics import edit_distance
+
+    baseline = list(data.baseline_orders.get(name, ()))
+    for strategy in folder.strategies:
+        found = orders(rows, name, strategy)
+        if not found:
+            table.append(f"<tr><td>{chip(data.colours[strategy])}{e(strategy)}</td>"
+                         '<td colspan=4 class="note">no trial yet</td></tr>')
+        for order, trials, failed in found:
+            edit = edit_distance(order.split(), baseline) if order and baseline else None
+            cls = ' class="fail"' if failed else ""
+            table.append(f"<tr{cls}><td class=s>{chip(data.colours[strategy])}{e(strategy)}</td>"
+                         f"<td>{order_html(order)}</td><td>{e(_ranges(trials))}</td>"
+                         f"<td class=n>{failed}</td><td class=n>{num(edit)}</td></tr>")
+    parts.append("".join(table) + "</table>")
+    fixed = [r for r in rows if r["strategy"] == FIXED_ORDER]
+    if fixed:
+        parts.append(f'<p class="note">Plus {len(fixed)} fixed-order trials (every order; '
+                     f'see <a href="#all-orders">all orders</a>).</p>')
+    mine = [r for r in data.interest if r["setup"] == name]
+    if mine:
+        parts.append("<h3>Trials</h3><p class=\"note\">The first trial of each strategy and "
+                     "every failed one: what the robot did when (the task tree's actions over "
+                     "robot time), how long each step took, what failed"
+                     + (", and the replay." if data.replays else ".") + "</p>")
+        parts += [_trial(data, r) for r in mine]
+    return "\n".join(parts)
+
+
+def _ranges(values: Sequence[int]) -> str:
+    """[0, 1, 2, 5] -> '0-2, 5'."""
+    out, start = [], None
+    for k, v in enumerate(values):
+        if start is None:
+            start = v
+        if k + 1 == len(values) or values[k + 1] != v + 1:
+            out.append(f"{start}" if start == v else f"{start}-{v}")
+            start = None
+    return ", ".join(out)
+
+
+def _trial(data: PageData, row: dict[str, Any]) -> str:
+    tid = trial_id(row)
+    good = ok(row)
+    colour = data.colours.get(row["strategy"], "#999")
+    head = (f'<div class="trial{"" if good else " failed"}" id="trial-{e(tid)}"><h4>'
+            f"{chip(colour)}{e(row['setup'])} · {e(row['strategy'])} · trial {e(row['trial'])}"
+            f" — " + ("succeeded" if good else '<span class="bad">FAILED</span>') + "</h4>")
+    facts = (f"<p>Order: {order_html(row['order'])}<br><span class=note>seed "
+             f"{e(row.get('seed', '–'))}; robot time {num(row.get('robot_time_s'))} s = wall "
+             f"{num(row.get('wall_s'))} s + driving {num(row.get('drive_s'))} s + arm "
+             f"{num(row.get('arm_s'))} s (opening and closing {num(row.get('open_close_s'))} "
+             f"s); driven path {num(row.get('base_path_m'))} m. Rerun it alone: "
+             f"<code>cramlite run {e(row['setup'])} --strategy "
+             f"{e(row['strategy'] if row['strategy'] != FIXED_ORDER else 'baseline')} "
+             f"--seed {e(row.get('seed', 0))}</code></span></p>")
+    parts = [head, facts]
+    if not good:
+        lines = failure_text(row).split(" | ")
+        parts.append('<div class="failure">' + "<br>".join(
+            e(t if len(t) <= 260 else t[:260] + " …") for t in lines) + "</div>")
+    if tid in data.timelines:
+        parts.append(img(data.timelines[tid], f"timeline of {tid}"))
+    table = _steps(row)
+    if table:
+        parts.append(f"<details{'' if good else ' open'}><summary>Steps and their durations"
+                     f"</summary>{table}</details>")
+    if tid in data.replays:
+        parts.append(f"<figure>{img(data.replays[tid], f'replay of {tid}')}<figcaption>Replay "
+                     f"from the trace, {e(_speed(data.replays[tid]))} times faster than the "
+                     "robot moved (robot time and the action in progress at the top left)."
+                     "</figcaption></figure>")
+    elif tid in data.replay_notes:
+        parts.append(f'<p class="note">{e(data.replay_notes[tid])}</p>')
+    parts.append("</div>")
+    return "\n".join(parts)
+
+
+def _speed(file: str) -> str:
+    return file.rsplit("-x", 1)[-1].removesuffix(".gif")
+
+
+def _steps(row: dict[str, Any]) -> str:
+    found = steps(row.get("actions") or [])
+    if not found:
+        return ""
+    lines = ["<table><tr><th>step</th><th>object</th><th>start s</th><th>duration s</th>"
+             "<th>status</th><th>failure</th></tr>"]
+    for step in found:
+        indent = "&nbsp;" * 6 * step.depth
+        times = f" ({step.count} attempts)" if step.count > 1 else ""
+        cls = ' class="fail"' if step.status == "failed" else ""
+        failure = step.failure if len(step.failure) <= 220 else step.failure[:220] + " …"
+        lines.append(f"<tr{cls}><td>{indent}{e(step.name.removesuffix('Action'))}{e(times)}"
+                     f"</td><td>{e(step.object)}</td><td class=n>{num(step.start, 1)}</td>"
+                     f"<td class=n>{num(step.duration, 1)}</td><td>{e(step.status)}</td>"
+                     f'<td title="{e(step.failure)}">{e(failure)}</td></tr>')
+    return "".join(lines) + "</table>"
+
+
+def _all_orders(data: PageData) -> str:
+    if not (data.percentiles or data.all_orders_plot):
+        return ""
+    parts = ['<h2 id="all-orders">All orders</h2><p class="note">Every order of the items was '
+             "run once as a fixed order; where each strategy's mean falls among them "
+             "(percentage of orders with a lower value: 0 % = better than every order).</p>"]
+    if data.all_orders_plot:
+        parts.append(f"<figure>{img(data.all_orders_plot, 'strategies among all orders')}"
+                     "<figcaption>Histogram: driven path of every fixed order; vertical line: "
+                     "each strategy's mean driven path (successful trials).</figcaption>"
+                     "</figure>")
+    if data.percentiles:
+        parts.append("<table><tr><th>setup</th><th>strategy</th><th>orders</th>"
+                     "<th>driven path</th><th>straight-line</th><th>robot time</th></tr>")
+        for p in data.percentiles:
+            parts.append(f"<tr><td>{e(p['setup'])}</td><td>{e(p['strategy'])}</td>"
+                         f"<td class=n>{p['orders']}</td>"
+                         f"<td class=n>{p['base_path_m_percentile']:.0f} %</td>"
+                         f"<td class=n>{p['straight_line_m_percentile']:.0f} %</td>"
+                         f"<td class=n>{p['robot_time_s_percentile']:.0f} %</td></tr>")
+        parts.append("</table>")
+    return "\n".join(parts)
+
+
+def _failures(data: PageData) -> str:
+    failed = [r for r in data.folder.rows if not ok(r)]
+    if not failed:
+        return '<h2 id="failures">Failures</h2><p>None: every trial succeeded.</p>'
+    shown = {trial_id(r) for r in data.interest}
+    lines = ['<h2 id="failures">Failures</h2><table><tr><th>setup</th><th>strategy</th>'
+             "<th>trial</th><th>what failed</th></tr>"]
+    for row in failed:
+        tid = trial_id(row)
+        link = (f'<a href="#trial-{e(tid)}">{e(row["trial"])}</a>' if tid in shown
+                else e(row["trial"]))
+        text = failure_text(row)
+        lines.append(f"<tr class=fail><td>{e(row['setup'])}</td><td>{e(row['strategy'])}</td>"
+                     f"<td>{link}</td><td title=\"{e(text)}\">"
+                     f"{e(text if len(text) < 400 else text[:400] + ' …')}</td></tr>")
+    lines.append("</table>")
+    if data.failed_left_out:
+        lines.append(f'<p class="note">{data.failed_left_out} failed trials have no timeline '
+                     "of their own here (the first ones of each setup do).</p>")
+    return "".join(lines)

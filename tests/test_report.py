@@ -1,0 +1,242 @@
+"""The bench report page as a user gets it: `cramlite bench` writes it, `cramlite report`
+rebuilds it (also for an interrupted or still running bench), every setup, strategy and
+picture is there, nothing is fetched from the network; bad folders exit 2."""
+
+from __future__ import annotations
+
+import csv
+import html.parser
+import json
+import math
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cramlite.bench.lock import FolderLock
+from cramlite.trace.path import simplify_path
+from tests.conftest import ROOT
+
+SETUPS = ("v1", "unreachable")
+STRATEGIES = ("baseline", "opm")
+
+
+def cli(*args: str, env: dict | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "cramlite", *args], capture_output=True,
+                          text=True, cwd=ROOT, timeout=600, env=env)
+
+
+@pytest.fixture(scope="module")
+def bench_dir(tmp_path_factory) -> Path:
+    """A tiny bench with traces (one trial of each setup and strategy; the milk of
+    `unreachable` cannot be reached, so its trials fail), and its report with pictures."""
+    out = tmp_path_factory.mktemp("report") / "results"
+    done = cli("bench", "--out", str(out), "--setups", ",".join(SETUPS), "--strategies",
+               ",".join(STRATEGIES), "--trials", "1", "--workers", "2", "--traces",
+               "--no-plots")
+    assert done.returncode == 1, done.stderr  # the unreachable trials fail
+    assert done.stdout.strip().splitlines()[-1] == f"report: {(out / 'report.html').resolve()}"
+    built = cli("report", str(out), "--max-replays", "1")
+    assert built.returncode == 0, built.stderr
+    assert built.stdout.strip() == f"wrote {out / 'report.html'}"
+    return out
+
+
+class Page(html.parser.HTMLParser):
+    """The page's ids, links, pictures and text."""
+
+    def __init__(self, text: str):
+        super().__init__()
+        self.ids: set[str] = set()
+        self.links: list[str] = []
+        self.images: list[str] = []
+        self.tags: set[str] = set()
+        self.text: list[str] = []
+        self.feed(text)
+
+    def handle_starttag(self, tag, attrs):
+        self.tags.add(tag)
+        values = dict(attrs)
+        if "id" in values:
+            self.ids.add(values["id"])
+        if tag == "img":
+            self.images.append(values["src"])
+        for key in ("href", "src", "srcset", "action", "data"):
+            if values.get(key):
+                self.links.append(values[key])
+
+    def handle_data(self, data):
+        self.text.append(data)
+
+
+def rows(folder: Path) -> list[dict[str, str]]:
+    with (folder / "trials.csv").open() as handle:
+        return list(csv.DictReader(handle))
+
+
+def test_page_shows_every_setup_strategy_order_and_failure_offline(bench_dir: Path) -> None:
+    text = (bench_dir / "report.html").read_text()
+    page = Page(text)
+    # no network: no script, no stylesheet or picture from elsewhere
+    assert "script" not in page.tags and "link" not in page.tags
+    assert all("://" not in link and not link.startswith("//") for link in page.links)
+    assert "url(" not in text and "@import" not in text
+    # every referenced picture is a file beside the page
+    assert page.images
+    for src in page.images:
+        assert (bench_dir / src).is_file(), src
+    for setup in SETUPS:
+        assert f"setup-{setup}" in page.ids
+        assert f"report/map-{setup}.png" in page.images
+    plain = " ".join(page.text)
+    for row in rows(bench_dir):
+        trial = f"{row['setup']}-{row['strategy']}-{row['trial']}"
+        assert f"trial-{trial}" in page.ids  # first trial of each setup and strategy
+        assert f"report/timeline-{trial}.png" in page.images
+        numbered = " → ".join(f"{k}\xa0{n}" for k, n in enumerate(row["order"].split(), 1))
+        assert numbered in plain  # the order it chose, numbered
+        if row["success"] != "True":
+            assert "ObjectUnreachable" in plain and "milk" in plain
+    assert plain.count("FAILED") >= 2
+    # one replay drawn (--max-replays 1), the others say why not
+    gifs = [src for src in page.images if src.endswith(".gif")]
+    assert len(gifs) == 1 and "replay not drawn" in plain
+    for strategy in STRATEGIES:
+        assert strategy in plain
+
+
+def test_driven_path_column_follows_the_executed_path(bench_dir: Path) -> None:
+    for row in rows(bench_dir):
+        path = json.loads(row["driven_path"])
+        assert path[0] == [-0.5, -1.8]  # the robot's start
+        length = sum(math.dist(a, b) for a, b in zip(path, path[1:], strict=False))
+        assert length == pytest.approx(float(row["base_path_m"]), rel=0.1)
+        assert len(row["driven_path"]) < 2000
+
+
+def test_simplify_path_keeps_the_shape_within_a_centimetre() -> None:
+    line = np.c_[np.linspace(0, 3, 1000), np.zeros(1000)]
+    assert simplify_path(line) == [[0.0, 0.0], [3.0, 0.0]]
+    corner = np.r_[line, np.c_[np.full(500, 3.0), np.linspace(0, 2, 500)]]
+    assert simplify_path(corner) == [[0.0, 0.0], [3.0, 0.0], [3.0, 2.0]]
+    t = np.linspace(0, 2 * np.pi, 2000)
+    curve = np.c_[np.cos(t), np.sin(2 * t)]
+    simple = np.array(simplify_path(curve))
+    assert len(simple) < 120
+    # every original point is within ~1 cm (+ rounding) of the simplified polyline
+    worst = max(min(_segment_distance(p, a, b) for a, b in zip(simple, simple[1:],
+                                                             strict=False)) for p in curve)
+    assert worst < 0.02
+
+
+def _segment_distance(p, a, b) -> float:
+    ab, ap = b - a, p - a
+    s = np.clip(np.dot(ap, ab) / max(np.dot(ab, ab), 1e-12), 0, 1)
+    return float(np.hypot(*(ap - s * ab)))
+
+
+def test_report_of_an_interrupted_and_of_a_running_bench(bench_dir: Path, tmp_path) -> None:
+    folder = tmp_path / "cut"
+    folder.mkdir()
+    shutil.copy(bench_dir / "metadata.json", folder)
+    lines = (bench_dir / "trials.csv").read_text().splitlines(keepends=True)
+    # the header, one finished trial and one cut short by a kill
+    (folder / "trials.csv").write_text(lines[0] + lines[1] + lines[2][:120])
+    done = cli("report", str(folder), "--no-plots")
+    assert done.returncode == 0, done.stderr
+    page = Page((folder / "report.html").read_text())
+    plain = " ".join(page.text)
+    assert "Incomplete: 1 of the 4 trials" in plain and "interrupted" in plain
+    for setup in SETUPS:  # setups without a trial yet are there, saying so
+        assert f"setup-{setup}" in page.ids
+    assert "no trial yet" in plain
+    with FolderLock(folder):  # a bench still writing into the folder
+        done = cli("report", str(folder), "--no-plots")
+    assert done.returncode == 0, done.stderr
+    assert "a bench is still writing into this folder" in (folder / "report.html").read_text()
+
+
+def test_report_is_the_same_when_built_twice(bench_dir: Path, tmp_path) -> None:
+    copy = tmp_path / "again"
+    shutil.copytree(bench_dir, copy, ignore=shutil.ignore_patterns("report*", "traces"))
+    for _ in range(2):
+        assert cli("report", str(copy)).returncode == 0
+        first = {p.name: p.read_bytes() for p in (copy / "report").iterdir()}
+        page = (copy / "report.html").read_bytes()
+    assert cli("report", str(copy)).returncode == 0
+    assert (copy / "report.html").read_bytes() == page
+    assert {p.name: p.read_bytes() for p in (copy / "report").iterdir()} == first
+
+
+def test_without_matplotlib_the_page_has_its_tables(bench_dir: Path, tmp_path) -> None:
+    copy = tmp_path / "plain"
+    shutil.copytree(bench_dir, copy, ignore=shutil.ignore_patterns("report*", "traces"))
+    code = ("import sys; sys.modules['matplotlib'] = None; from cramlite.cli import main; "
+            f"sys.exit(main(['report', {str(copy)!r}]))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=ROOT, timeout=300)
+    assert done.returncode == 0, done.stderr
+    page = Page((copy / "report.html").read_text())
+    assert not page.images
+    plain = " ".join(page.text)
+    assert "pip install 'cramlite[plots]'" in plain and "setup-v1" in page.ids
+    assert "ObjectUnreachable" in plain
+
+
+@pytest.mark.parametrize("case, expected", [
+    ("missing", "no such folder; expected a results folder"),
+    ("file", "is a file; expected a results folder"),
+    ("empty", "holds no trials.csv or metadata.json"),
+    ("no rows", "no finished trial yet"),
+    ("columns", "has no column setup"),
+    ("json", "line 2: actions: expected a JSON list"),
+    ("metadata", "metadata.json: not valid JSON"),
+])
+def test_a_folder_that_is_not_a_bench_folder_exits_2(bench_dir: Path, tmp_path, case: str,
+                                                     expected: str) -> None:
+    folder = tmp_path / "bad"
+    if case == "file":
+        folder.write_text("x")
+    elif case != "missing":
+        folder.mkdir()
+    header = (bench_dir / "trials.csv").read_text().splitlines()[0]
+    row = rows(bench_dir)[0]
+    if case == "no rows":
+        (folder / "trials.csv").write_text(header + "\n")
+    elif case == "columns":
+        (folder / "trials.csv").write_text("a,b\n1,2\n")
+    elif case == "json":
+        with (folder / "trials.csv").open("w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=list(row))
+            writer.writeheader()
+            writer.writerow({**row, "actions": "{oops"})
+    elif case == "metadata":
+        (folder / "metadata.json").write_text("{")
+    done = cli("report", str(folder))
+    assert done.returncode == 2
+    assert "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    assert done.stderr.startswith("cramlite report: error: ") and expected in done.stderr
+
+
+def test_show_top_draws_the_labelled_map(tmp_path) -> None:
+    out = tmp_path / "v1-top.png"
+    done = cli("show", "v1", "--top", "--out", str(out), "--width", "500", "--height", "400")
+    assert done.returncode == 0, done.stderr
+    from PIL import Image
+
+    assert Image.open(out).size == (500, 400)
+
+
+def test_labels_are_spread_and_points_project_onto_the_image() -> None:
+    from cramlite.world.render import DEFAULT_CAMERA, project
+    from cramlite.world.topdown import spread
+
+    placed = spread([1.0, 1.01, 1.02, 3.0, 0.99], 0.2, 0.0, 5.0)
+    ordered = sorted(placed)
+    assert all(b - a >= 0.2 - 1e-9 for a, b in zip(ordered, ordered[1:], strict=False))
+    assert placed[3] == 3.0  # a label with room stays where its spot is
+    u, v = project(np.array([DEFAULT_CAMERA["target"]]), 640, 480)[0]
+    assert (u, v) == pytest.approx((320, 240), abs=0.5)  # the camera looks at its target
