@@ -22,7 +22,7 @@ from cramlite.designators import (
 from cramlite.designators.locations import IDEAL_STANDOFF_M
 from cramlite.designators.storage import CloseAction, container_of, is_open
 from cramlite.strategies import Candidate, Strategy
-from cramlite.strategies.base import checked_choice
+from cramlite.strategies.base import checked_choice, checked_reset
 from cramlite.world.pr2 import TORSO_UP_M
 from cramlite.world.setup import Setup
 
@@ -80,8 +80,8 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
             goal = ((surf.x_min + surf.x_max) / 2, (surf.y_min + surf.y_max) / 2)
         return (goal[0], goal[1], 0.0)
 
-    strategy.reset([item_candidate(ctx, setup, n, then_at(n)) for n in remaining],
-                   robot_position(ctx))
+    checked_reset(strategy, [item_candidate(ctx, setup, n, then_at(n)) for n in remaining],
+                  robot_position(ctx))
     while remaining:
         candidates = [item_candidate(ctx, setup, n, then_at(n)) for n in remaining]
         here = robot_position(ctx)

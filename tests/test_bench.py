@@ -129,7 +129,7 @@ def test_failing_and_crashing_trials_are_recorded_and_the_batch_goes_on(tmp_path
         by_strategy.setdefault(r["strategy"], []).append(r)
     assert all(r["success"] == "True" for r in by_strategy["baseline"])
     for r in by_strategy["badstrategies:Boom"]:
-        assert r["success"] == "False" and r["error_type"] == "StrategyError"
+        assert r["success"] == "False" and r["error_type"] == "StrategyCrashed"
         assert "badstrategies.Boom" in r["error"] and "RuntimeError: strategy exploded" in \
             r["error"]
     for r in by_strategy["badstrategies:Crash"]:

@@ -101,6 +101,13 @@ class ReturnsName(Strategy):
     def choose(self, remaining, agent):
         return remaining[0].name
 
+class ResetRaises(Strategy):
+    name = "reset-raises"
+    def reset(self, candidates, agent):
+        raise RuntimeError("no reset")
+    def choose(self, remaining, agent):
+        return remaining[0]
+
 class BadInit(Strategy):
     name = "bad-init"
     def __init__(self, *args, **kwargs):
@@ -156,6 +163,7 @@ def test_a_plugin_whose_constructor_fails_is_named(misbehaving: Path) -> None:
     ("Raises", "raised KeyError"),
     ("ReturnsNone", "returned None"),
     ("ReturnsStranger", "returned Candidate(name='teapot'"),
+    ("ResetRaises", "raised RuntimeError when reset: no reset"),
     ("BadInit", "could not be created"),
 ])
 def test_run_with_a_misbehaving_plugin_is_one_clear_line(misbehaving: Path, cls: str,
@@ -169,6 +177,28 @@ def test_run_with_a_misbehaving_plugin_is_one_clear_line(misbehaving: Path, cls:
     assert len(lines) == 1
     assert "--strategy" in lines[0] and f"misbehaving.{cls}" in lines[0]
     assert expected in lines[0]
+
+
+@pytest.mark.parametrize("command", ["evaluate", "compare", "fit"])
+@pytest.mark.parametrize(("cls", "expected"), [
+    ("Raises", "raised KeyError"),
+    ("ReturnsStranger", "Candidate(name='teapot'"),
+    ("ResetRaises", "raised RuntimeError when reset: no reset"),
+])
+def test_scoring_a_misbehaving_plugin_stops_with_one_clear_line(
+        misbehaving: Path, tmp_path: Path, command: str, cls: str, expected: str) -> None:
+    """Not an episode skipped per bug (every one would be): one line, exit 2."""
+    name = f"misbehaving:{cls}"
+    args = {"evaluate": ["evaluate", "table-setting", "--strategy", name],
+            "compare": ["compare", "table-setting", "--strategies", f"opm,{name}"],
+            "fit": ["fit", "table-setting", "--strategy", name, "--workers", "1",
+                    "--out", str(tmp_path / "fit")]}[command]
+    result = run_cli_env(args, {"PYTHONPATH": str(misbehaving)})
+    print(result.stderr[-2000:])
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    last = result.stderr.strip().splitlines()[-1]
+    assert "--strateg" in last and f"misbehaving.{cls}" in last and expected in last
 
 
 def test_run_optimal_with_more_than_15_items_is_the_clean_error(tmp_path: Path) -> None:

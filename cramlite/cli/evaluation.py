@@ -19,6 +19,7 @@ from cramlite.cli.common import (
 )
 from cramlite.errors import UserInputError
 from cramlite.evaluation.options import DIM_NAMES, METRICS, PROTOCOLS
+from cramlite.strategies.base import StrategyError
 
 
 @contextlib.contextmanager
@@ -77,6 +78,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             result = evaluate(episodes, args.strategy, params, args.dims, args.form, args.metric,
                               args.repeats, args.seed, progress=bar.update,
                               protocol=args.protocol, data_sha256=_sha256(args))
+    except StrategyError as exc:  # a plugin that raises or returns a non-candidate
+        raise UserInputError(str(exc), field="--strategy") from None
     except ValueError as exc:  # e.g. expected-ape with a strategy that has memory
         raise UserInputError(str(exc), field="--metric") from None
     with quiet_broken_pipe():
@@ -129,6 +132,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
             result = fit(episodes, args.strategy, dims, args.metric, args.repeats, args.seed,
                          args.form, configs, progress=bar.update, protocol=args.protocol,
                          workers=args.workers)
+    except StrategyError as exc:  # a plugin that raises or returns a non-candidate
+        raise UserInputError(str(exc), field="--strategy") from None
     except ValueError as exc:
         raise UserInputError(str(exc), field="--metric") from None
     baselines = [baseline_score(ep, args.metric, protocol=args.protocol)[0] for ep in episodes]

@@ -16,6 +16,7 @@ from cramlite.cli.common import (
 from cramlite.cli.evaluation import add_protocol_argument, out_folder, quiet_broken_pipe
 from cramlite.errors import UserInputError
 from cramlite.evaluation.options import METRICS
+from cramlite.strategies.base import StrategyError
 
 MODEL_KINDS = ("cpt", "rnn", "nn")
 
@@ -73,6 +74,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         try:
             result = compare(episodes, strategies, args.metric, args.protocol, args.repeats,
                              args.seed, data_sha256=file_sha256(data), progress=bar.update)
+        except StrategyError as exc:  # a plugin that raises or returns a non-candidate
+            raise UserInputError(str(exc), field="--strategies") from None
         except ValueError as exc:
             raise UserInputError(str(exc), field="--metric") from None
     summary = result["summary"]

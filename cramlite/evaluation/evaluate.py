@@ -20,7 +20,7 @@ from cramlite.evaluation.metrics import (
 )
 from cramlite.evaluation.options import METRICS
 from cramlite.evaluation.protocol import is_reference
-from cramlite.strategies.base import Strategy, StrategyError
+from cramlite.strategies.base import Strategy, StrategyCrashed, StrategyError
 from cramlite.strategies.registry import make_strategy, strategy_class
 from cramlite.strategies.simple import RandomStrategy
 
@@ -171,7 +171,9 @@ def evaluate(episodes: Sequence[Episode], strategy: str = "opm",
                 score = score_episode(make, episode, metric, repeats,
                                       episode_rng(seed, index), protocol)
                 is_exact = True
-        except StrategyError as exc:
+        except StrategyCrashed:
+            raise  # a bug in the strategy: stop, the rest would fail the same way
+        except StrategyError as exc:  # it cannot handle this episode (e.g. too many items)
             skipped.append((episode.id, str(exc)))
             continue
         scores.append(score)

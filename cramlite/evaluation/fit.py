@@ -22,7 +22,7 @@ from cramlite.evaluation.data import Episode
 from cramlite.evaluation.evaluate import episode_rng, score_episode, strategy_factory
 from cramlite.evaluation.metrics import ape_uniforms, sampled_errors
 from cramlite.evaluation.protocol import ape_steps
-from cramlite.strategies.base import StrategyError
+from cramlite.strategies.base import StrategyCrashed, StrategyError
 from cramlite.strategies.cost import DIMS
 from cramlite.strategies.opm import NearestStrategy, OPMStrategy, OPMTwoStepStrategy
 from cramlite.strategies.optimal import TIE_RTOL, OptimalStrategy
@@ -158,6 +158,8 @@ def _score_points(task: tuple) -> np.ndarray:
             try:
                 table[e, g] = score_episode(make, episode, metric, repeats,
                                             episode_rng(seed, e), protocol)
+            except StrategyCrashed:
+                raise  # a bug in the strategy: every point would fail the same way
             except StrategyError:  # e.g. too many items for `optimal`
                 table[e, g] = np.nan
     return table

@@ -27,7 +27,7 @@ from rapidfuzz.distance import OSA, DamerauLevenshtein
 
 from cramlite.evaluation.data import Episode
 from cramlite.evaluation.protocol import ape_steps, generation_candidates, is_reference, pool
-from cramlite.strategies.base import Strategy
+from cramlite.strategies.base import Strategy, checked_choice, checked_reset, checked_tied
 
 #: Above this many items the published random edit baseline is sampled, not enumerated.
 EXACT_PERMUTATION_LIMIT = 9
@@ -56,10 +56,10 @@ def _observe(strategy: Strategy, taken) -> None:
 def correct_probabilities(strategy: Strategy, episode: Episode,
                           protocol: str = "heldout") -> list[float]:
     """P(prediction == observed) at each scored step, for a strategy with exact ties."""
-    strategy.reset(pool(episode, protocol), episode.start_positions[0])
+    checked_reset(strategy, pool(episode, protocol), episode.start_positions[0])
     probs = []
     for step in ape_steps(episode, protocol):
-        tied = strategy.tied(step.candidates, step.agent)
+        tied = checked_tied(strategy, step.candidates, step.agent)
         probs.append(sum(c.name == step.observed_name for c in tied) / len(tied))
         _observe(strategy, step.candidates[step.observed])
     return probs
@@ -86,11 +86,11 @@ def ape_uniforms(rng: np.random.Generator, repeats: int, steps: int) -> np.ndarr
 def prequential_errors(strategy: Strategy, episode: Episode,
                        protocol: str = "heldout") -> tuple[int, int]:
     """One teacher-forced run of any strategy: (errors, random picks that had a choice)."""
-    strategy.reset(pool(episode, protocol), episode.start_positions[0])
+    checked_reset(strategy, pool(episode, protocol), episode.start_positions[0])
     errors = 0
     picks_before = _random_picks(strategy)
     for step in ape_steps(episode, protocol):
-        chosen = strategy.choose(list(step.candidates), step.agent)
+        chosen = checked_choice(strategy, list(step.candidates), step.agent)
         errors += chosen.name != step.observed_name
         _observe(strategy, step.candidates[step.observed])
     return errors, _random_picks(strategy) - picks_before
@@ -126,11 +126,11 @@ def generate_sequence(strategy: Strategy, episode: Episode,
     (over the distinct names under the reference protocol)."""
     items = pool(episode, protocol)
     remaining = list(range(len(items)))
-    strategy.reset(items, episode.start_positions[0])
+    checked_reset(strategy, items, episode.start_positions[0])
     order = []
     for step in range(len(items)):
         candidates = generation_candidates(episode, protocol, step, remaining)
-        chosen = strategy.choose(candidates, episode.start_positions[step])
+        chosen = checked_choice(strategy, candidates, episode.start_positions[step])
         index = remaining[candidates.index(chosen)]
         order.append(items[index].name)
         remaining.remove(index)

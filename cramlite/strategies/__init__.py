@@ -1,6 +1,6 @@
 """Ordering strategies: which item to fetch next. Pure Python/numpy, no PyBullet."""
 
-from cramlite.strategies.base import Strategy, StrategyError
+from cramlite.strategies.base import Strategy, StrategyCrashed, StrategyError
 from cramlite.strategies.candidates import CATEGORIES, Candidate, OPMParams
 from cramlite.strategies.cost import DIMS, FORMS, CostModel, span_weights
 from cramlite.strategies.opm import NearestStrategy, OPMStrategy, OPMTwoStepStrategy
@@ -10,5 +10,5 @@ from cramlite.strategies.simple import BaselineStrategy, RandomStrategy
 
 __all__ = ["CATEGORIES", "DIMS", "FORMS", "MAX_OPTIMAL_ITEMS", "BaselineStrategy", "Candidate",
            "CostModel", "NearestStrategy", "OPMParams", "OPMStrategy", "OPMTwoStepStrategy",
-           "OptimalStrategy", "RandomStrategy", "Strategy", "StrategyError",
+           "OptimalStrategy", "RandomStrategy", "Strategy", "StrategyCrashed", "StrategyError",
            "available_strategies", "make_strategy", "span_weights", "strategy_class"]

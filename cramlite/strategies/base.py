@@ -34,6 +34,11 @@ class StrategyError(ValueError):
     """A strategy was asked for something it cannot do (bad name, too many items...)."""
 
 
+class StrategyCrashed(StrategyError):
+    """A strategy raised something else than a StrategyError, or returned something that
+    is not a candidate: a bug in it, not a case it cannot handle (evaluations stop)."""
+
+
 def as_generator(rng: np.random.Generator | int | None) -> np.random.Generator:
     import numpy as np
 
@@ -70,6 +75,37 @@ def strategy_label(strategy: Strategy) -> str:
     return f"{cls.name!r} ({cls.__module__}.{cls.__qualname__})"
 
 
+def checked_reset(strategy: Strategy, candidates: Sequence[Candidate],
+                  agent: Sequence[float]) -> None:
+    """`strategy.reset(candidates, agent)`, checked like `checked_choice`: a plugin that
+    raises becomes a StrategyError naming it."""
+    try:
+        strategy.reset(candidates, agent)
+    except StrategyError:
+        raise
+    except Exception as exc:
+        raise StrategyCrashed(f"strategy {strategy_label(strategy)} raised "
+                              f"{type(exc).__name__} when reset: {exc}") from exc
+
+
+def checked_tied(strategy: Strategy, remaining: Sequence[Candidate],
+                 agent: Sequence[float]) -> list[Candidate]:
+    """`strategy.tied(remaining, agent)`, checked like `checked_choice`."""
+    try:
+        tied = list(strategy.tied(remaining, agent))
+    except StrategyError:
+        raise
+    except Exception as exc:
+        raise StrategyCrashed(f"strategy {strategy_label(strategy)} raised "
+                              f"{type(exc).__name__}: {exc}") from exc
+    if not tied or not all(any(c is t or c == t for c in remaining) for t in tied):
+        shown = repr(tied)
+        shown = shown if len(shown) <= 80 else shown[:77] + "..."
+        raise StrategyCrashed(f"strategy {strategy_label(strategy)} returned {shown} as its "
+                              "tied choices; expected some of the remaining candidates")
+    return tied
+
+
 def checked_choice(strategy: Strategy, remaining: Sequence[Candidate],
                    agent: Sequence[float]) -> Candidate:
     """`strategy.choose(remaining, agent)`, checked: the one place where a misbehaving
@@ -81,8 +117,8 @@ def checked_choice(strategy: Strategy, remaining: Sequence[Candidate],
     except StrategyError:
         raise
     except Exception as exc:
-        raise StrategyError(f"strategy {strategy_label(strategy)} raised "
-                            f"{type(exc).__name__}: {exc}") from exc
+        raise StrategyCrashed(f"strategy {strategy_label(strategy)} raised "
+                              f"{type(exc).__name__}: {exc}") from exc
     for candidate in remaining:
         if candidate is choice:
             return candidate
@@ -91,7 +127,7 @@ def checked_choice(strategy: Strategy, remaining: Sequence[Candidate],
             return candidate
     shown = repr(choice)
     shown = shown if len(shown) <= 80 else shown[:77] + "..."
-    raise StrategyError(f"strategy {strategy_label(strategy)} returned {shown} "
+    raise StrategyCrashed(f"strategy {strategy_label(strategy)} returned {shown} "
                         f"({type(choice).__name__}); expected one of the {len(remaining)} "
                         "remaining candidates")
 
