@@ -205,6 +205,16 @@ def test_learned_strategy_in_run_bench_and_the_registry(models, tmp_path) -> Non
                     "--trials", "1", "--workers", "1", "--out", str(tmp_path / "b"))
     assert bench.returncode == 0, bench.stderr
     assert "learned" in (tmp_path / "b" / "trials.csv").read_text()
+    # `order`: the model on the command line answers; a request naming a model file is refused
+    request = {"robot": [0, 0, 0], "items": [{"name": "cup", "position": [1, 0, 0]},
+                                             {"name": "bowl", "position": [2, 0, 0]}]}
+    order = run_cli("order", "--strategy", f"learned:{models['nn']}", "-",
+                    stdin=json.dumps(request))
+    assert order.returncode == 0, order.stderr
+    assert set(json.loads(order.stdout)["order"]) == {"cup", "bowl"}
+    sneaky = run_cli("order", "-", stdin=json.dumps({**request,
+                                                     "strategy": f"learned:{models['nn']}"}))
+    assert sneaky.returncode == 2 and "may not name a model file" in sneaky.stderr
 
 
 def test_compare_command_writes_figure_and_paired_tests(models, slice_csv, tmp_path) -> None:

@@ -52,6 +52,10 @@ def strategy_class(name: str, *, registered_only: bool = False) -> type[Strategy
     if name in BUILTIN:
         return BUILTIN[name]
     if name.startswith(LEARNED_PREFIX):  # a trained model; numpy (and cpt) only when used
+        if registered_only:  # a request must not make the service read files
+            raise StrategyError(f"{name!r}: a request may not name a model file; give it on "
+                                "the command line (cramlite order --strategy "
+                                f"{name}) and leave 'strategy' out of the request")
         from cramlite.learning.strategy import learned_class
 
         try:
