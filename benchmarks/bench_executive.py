@@ -129,7 +129,7 @@ def main() -> None:
         planner = BaseMotionPlanner(FootprintChecker(OccupancyMap(world.environment_boxes())))
         queries = {"start -> island (blocked straight line)":
                    ((-0.5, -1.8, math.pi / 2), (-0.3, 1.4, math.pi)),
-                   "counter -> island": ((0.85, -0.46, 0.0), (-0.3, 1.4, math.pi)),
+                   "counter -> island": ((0.80, -0.46, 0.0), (-0.3, 1.4, math.pi)),
                    "around the island corner": ((-0.3, 0.1, 0.0), (-1.95, 1.7, math.pi / 2))}
         for name, (a, b) in queries.items():
             times = []
