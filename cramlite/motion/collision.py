@@ -25,8 +25,10 @@ from cramlite.world.bodies import Quat, Vec3
 from cramlite.world.bullet import p
 from cramlite.world.quiet import c_stdout_silenced
 
-#: Penetration allowed for the convex-hull approximation of the robot's meshes.
-PENETRATION_TOLERANCE_M = 0.01
+#: Penetration allowed for the convex-hull approximation of the robot's meshes: 1 cm, less
+#: 2 mm in the states a motion is checked at (a link moving up to 2 cm between two of them
+#: may go a little deeper on the way, and the trace's check allows 1 cm there too).
+PENETRATION_TOLERANCE_M = 0.008
 
 
 @dataclass(frozen=True)
