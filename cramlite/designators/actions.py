@@ -455,16 +455,17 @@ def footprint_outline(points_xy: np.ndarray, spacing: float) -> np.ndarray:
     link's footprint as seen from above)."""
     from scipy.spatial import ConvexHull, QhullError
 
-    pts = np.unique(np.round(np.asarray(points_xy, dtype=float), 6), axis=0)
+    pts = np.asarray(points_xy, dtype=float).reshape(-1, 2)
     try:
         hull = pts[ConvexHull(pts).vertices]
     except (QhullError, ValueError):  # fewer than 3 points, or all on a line
-        return pts
-    samples = []
-    for a, b in zip(hull, np.roll(hull, -1, axis=0), strict=True):
-        n = max(1, math.ceil(float(np.hypot(*(b - a))) / spacing))
-        samples.append(a + (np.arange(n)[:, None] / n) * (b - a))
-    return np.vstack(samples)
+        return np.unique(np.round(pts, 6), axis=0)
+    # n points on each edge a -> b, from a (inclusive) towards b (exclusive)
+    edges = np.roll(hull, -1, axis=0) - hull
+    n = np.maximum(1, np.ceil(np.hypot(edges[:, 0], edges[:, 1]) / spacing)).astype(int)
+    edge = np.repeat(np.arange(len(hull)), n)
+    step = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)
+    return hull[edge] + (step / n[edge])[:, None] * edges[edge]
 
 
 def update_carried(ctx: RobotContext) -> None:

@@ -22,7 +22,7 @@ from cramlite.designators.tasks import TaskTree
 from cramlite.motion.arm_planner import ArmMotionPlanner, ArmPlannerOptions
 from cramlite.motion.base_planner import BaseMotionPlanner, BasePlannerOptions
 from cramlite.motion.collision import CollisionChecker, HeldObject
-from cramlite.motion.footprint import FootprintChecker, OccupancyMap
+from cramlite.motion.footprint import FLOOR_HEIGHT_M, FootprintChecker, OccupancyMap
 from cramlite.motion.ik import tool_frame
 from cramlite.motion.trajectory import (
     ACCELERATION_TIME_S,
@@ -99,10 +99,18 @@ def _joint_state(world: World) -> tuple[float, ...]:
 
 def occupancy_map(world: World, min_top_m: float = 0.0) -> OccupancyMap:
     """The world's 2D map as its drawers and doors stand now (only links whose top is
-    above `min_top_m` count), cached per world."""
+    above `min_top_m` count), cached per world: by height and joint state, and by the
+    links that count (carried objects at many heights share a few maps)."""
     key = ("occupancy", min_top_m, _joint_state(world))
     if key not in world.cache:
-        world.cache[key] = OccupancyMap(world.environment_boxes(), min_top_m=min_top_m)
+        boxes = world.environment_boxes()
+        counted = tuple((name, tuple(np.round(lo, 4)), tuple(np.round(hi, 4)))
+                        for name, lo, hi in boxes
+                        if hi[2] <= FLOOR_HEIGHT_M or hi[2] > max(min_top_m, FLOOR_HEIGHT_M))
+        same = ("occupancy of", counted)
+        if same not in world.cache:
+            world.cache[same] = OccupancyMap(boxes, min_top_m=min_top_m)
+        world.cache[key] = world.cache[same]
     return world.cache[key]
 
 
