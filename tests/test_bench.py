@@ -455,10 +455,15 @@ def test_all_orders_and_random_setups(tmp_path: Path) -> None:
     randoms = tmp_path / "rs"
     result = bench(randoms, "--setups", "v1", "--strategies", "opm", "--trials", "1",
                    "--random-setups", "2", "--workers", "2", "--no-plots")
-    assert result.returncode == 0, result.stderr[-1500:]
+    # (a random setup may hold a task the robot fails at: exit 1, the failure recorded)
+    assert result.returncode in (0, 1), result.stderr[-1500:]
     saved = sorted((randoms / "setups").glob("random-0-*.yaml"))
     assert len(saved) == 2
-    assert {r["setup"] for r in rows(randoms)} == {"v1", saved[0].stem, saved[1].stem}
+    table = rows(randoms)
+    assert {r["setup"] for r in table} == {"v1", saved[0].stem, saved[1].stem}
+    for r in table:
+        assert r["success"] == "True" or json.loads(r["failures"]), r
+    assert (result.returncode == 1) == any(r["success"] != "True" for r in table)
     rerun = run_cli("run", str(saved[0]), "--json")
     assert rerun.returncode == 0, rerun.stderr
 
