@@ -48,3 +48,36 @@ def test_joint_map_gives_the_same_forward_kinematics(seed: int) -> None:
             pos, _ = robot.link_pose(link)
             print(link, frame.translation.round(4), np.round(pos, 4))
             assert np.allclose(frame.translation, pos, atol=1e-5)
+
+
+@pytest.mark.parametrize("arm", ["right", "left"])
+def test_link_frames_by_pinocchio_are_pybullets(arm: str) -> None:
+    """The motion broadphase takes every link's frame from Pinocchio: at a turned, moved
+    base, with the other joints anywhere, they must be PyBullet's frames."""
+    from cramlite.designators.context import collision_checker
+    from cramlite.motion.ik import arm_joint_names
+    from cramlite.world import load_setup
+    from cramlite.world.bullet import p
+
+    rng = np.random.default_rng(3)
+    with World.from_setup(load_setup("v1")) as world:
+        robot = world.robot
+        robot.set_base_pose(0.4, -0.7, 2.2)
+        robot.set_joint_positions({"l_elbow_flex_joint": -1.0, "torso_lift_joint": 0.2,
+                                   "r_gripper_l_finger_joint": 0.3})
+        checker = collision_checker(world)
+        names = ["torso_lift_joint", *arm_joint_names(arm)]
+        scene = checker.scene(names, [])
+        states = rng.uniform(-2.0, 2.0, size=(12, len(names)))
+        states[:, 0] = rng.uniform(0.0, 0.3, 12)
+        positions, rotations = checker.link_frames().frames(names, states, scene.query_links)
+        assert positions.shape == (12, len(scene.query_links), 3)
+        for s, q in enumerate(states):
+            scene.set_state(q)
+            bullet = p.getLinkStates(robot.body, scene.query_links,
+                                     computeForwardKinematics=True,
+                                     physicsClientId=world.client)
+            for k, state in enumerate(bullet):
+                assert np.allclose(positions[s, k], state[4], atol=1e-5)
+                matrix = np.array(p.getMatrixFromQuaternion(state[5])).reshape(3, 3)
+                assert np.allclose(rotations[s, k], matrix, atol=1e-5)

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cramlite.motion.link_frames import LinkFrames
 from cramlite.world.bodies import Quat, Vec3
 from cramlite.world.bullet import p
 from cramlite.world.quiet import c_stdout_silenced
@@ -73,6 +74,13 @@ class CollisionChecker:
                            if p.getCollisionShapeData(body, j, physicsClientId=client)}
         self._moving_links_cache: dict[frozenset[str], list[int]] = {}
         self.spheres = self._link_spheres()
+        self._link_frames: LinkFrames | None = None
+
+    def link_frames(self) -> LinkFrames:
+        """The robot's link frames by Pinocchio (for the broadphase of whole motions)."""
+        if self._link_frames is None:
+            self._link_frames = LinkFrames(self.robot, self.client)
+        return self._link_frames
 
     def _link_spheres(self) -> dict[int, tuple[np.ndarray, float]]:
         """Link -> (centre in the link frame, radius) of a sphere that holds its shape."""
@@ -229,6 +237,7 @@ class CollisionScene:
         self._rows = np.array(rows, dtype=int)
         self._centres = np.array(centres, dtype=float).reshape(-1, 3)
         self._radii_sq = (np.array(radii, dtype=float) ** 2)[:, None]
+        self._radius_max = max(radii, default=0.0)
         held_names = {h.name for h in held}
         # obstacles: every environment link with a shape, every item not held or ignored
         obstacles: list[tuple[int, int, str]] = []
@@ -267,15 +276,26 @@ class CollisionScene:
 
     def _overlaps(self, positions: np.ndarray, orientations: np.ndarray) -> np.ndarray:
         """Broadphase for S states at once: positions (S x links x 3) and orientations
-        (S x links x 4) of the queried links -> mask (S x parts x obstacles) of the part
-        spheres that reach into obstacle boxes."""
+        (S x links x 4 quaternions, or S x links x 3 x 3 rotation matrices) of the queried
+        links -> mask (S x parts x obstacles) of the part spheres that reach into
+        obstacle boxes."""
         s = len(positions)
         pos = positions[:, self._rows].reshape(-1, 3)
-        orn = orientations[:, self._rows].reshape(-1, 4)
-        centres = pos + rotate(orn, np.tile(self._centres, (s, 1)))
-        c = centres[:, None, :]
-        gap = np.maximum(np.maximum(self._lo - c, c - self._hi), 0.0)
-        near = (gap * gap).sum(axis=2) < np.tile(self._radii_sq, (s, 1))
+        if orientations.ndim == 4:
+            rot = orientations[:, self._rows].reshape(-1, 3, 3)
+            centres = pos + (rot @ np.tile(self._centres, (s, 1))[:, :, None])[:, :, 0]
+        else:
+            orn = orientations[:, self._rows].reshape(-1, 4)
+            centres = pos + rotate(orn, np.tile(self._centres, (s, 1)))
+        # only the obstacles that meet the box around every sphere can be near one
+        reach = self._radius_max
+        low, high = centres.min(axis=0) - reach, centres.max(axis=0) + reach
+        close = np.flatnonzero(np.all((self._lo <= high) & (self._hi >= low), axis=1))
+        near = np.zeros((s * len(self._rows), len(self._lo)), dtype=bool)
+        if len(close):
+            c = centres[:, None, :]
+            gap = np.maximum(np.maximum(self._lo[close] - c, c - self._hi[close]), 0.0)
+            near[:, close] = (gap * gap).sum(axis=2) < np.tile(self._radii_sq, (s, 1))
         return near.reshape(s, len(self._rows), len(self._lo))
 
     def _pairs(self) -> np.ndarray:
@@ -291,13 +311,17 @@ class CollisionScene:
         self.checks += len(states)
         if not len(states) or not len(self._rows):
             return True
-        positions, orientations = [], []
-        for q in states:
-            self.set_state(q)
-            pos, orn = self._link_frames()
-            positions.append(pos)
-            orientations.append(orn)
-        near = self._overlaps(np.array(positions), np.array(orientations))
+        frames = self.checker.link_frames().frames(self.joints, np.asarray(states),
+                                                   self.query_links)
+        if frames is None:  # (Pinocchio cannot say: PyBullet, state by state)
+            positions, orientations = [], []
+            for q in states:
+                self.set_state(q)
+                pos, orn = self._link_frames()
+                positions.append(pos)
+                orientations.append(orn)
+            frames = np.array(positions), np.array(orientations)
+        near = self._overlaps(*frames)
         flagged = set(np.flatnonzero(near.any(axis=(1, 2))).tolist())
         for i in (order if order is not None else range(len(states))):
             if i not in flagged:

@@ -39,6 +39,9 @@ def tool_frame(arm: str) -> str:
     return f"{arm_prefix(arm)}_gripper_tool_frame"
 
 
+EYE6 = np.eye(6)
+
+
 @dataclass(frozen=True)
 class IKOptions:
     """Solver settings (pyroboplan style: a plain options object beside the solver)."""
@@ -252,14 +255,14 @@ class ArmIK:
         added in the null space. (LAPACK's Cholesky solver directly: numpy's inv costs
         three times as much on a 6x6 matrix.)"""
         if preferred_torso_m is None or self._torso is None:
-            return jac.T @ _solve_spd(jac @ jac.T + self.options.damping * np.eye(6), err)
+            return jac.T @ _solve_spd(jac @ jac.T + self.options.damping * EYE6, err)
         iq, iv = self._torso
         weight = self.options.torso_weight
         jac = jac.copy()
         jac[:, iv] *= weight
         pull = np.zeros(self.model.nv)
         pull[iv] = self.options.torso_preference_gain * (preferred_torso_m - q[iq])
-        gram = jac @ jac.T + self.options.damping * np.eye(6)
+        gram = jac @ jac.T + self.options.damping * EYE6
         w = _solve_spd(gram, np.column_stack([err, jac @ pull]))
         v = jac.T @ w[:, 0] + pull - jac.T @ w[:, 1]
         v[iv] *= weight
