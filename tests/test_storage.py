@@ -213,3 +213,25 @@ def test_kept_open_containers_are_closed_when_the_plan_ends(tmp_path: Path) -> N
     last_place = max(i for i, line in enumerate(data["log"]) if line.startswith("placed"))
     closes = [i for i, line in enumerate(data["log"]) if line.startswith("closed")]
     assert len(closes) == 2 and min(closes) > last_place  # by the plan, at its end
+
+
+def test_an_open_door_is_drawn_on_the_map_by_its_outline_not_its_bounds() -> None:
+    """A door swung open 2.3 rad spans a 44 x 39 cm square of axis-aligned bounds but is a
+    2 cm plate: the base planner's map blocks the plate (and its margin) only."""
+    from cramlite.designators.context import occupancy_map
+
+    with World.from_setup(load_setup("c1")) as world:
+        world.set_world_joint("cupboard_door_joint", 2.3)
+        door = world.environment_links["cupboard_door"]
+        (plate,) = world.link_outlines(door)
+        lo, hi = world.link_bounds(door)
+        grid = occupancy_map(world)
+        middle = plate.mean(axis=0)
+        assert grid.blocked_at(np.array([middle]))[0]
+        corners = np.array([[x, y] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])])
+        # the corner of the bounds farthest from the plate, 5 cm in
+        far = max(corners, key=lambda c: np.linalg.norm(plate - c, axis=1).min())
+        inward = np.sign(middle - far) * 0.05
+        assert not grid.blocked_at(np.array([far + inward]))[0]
+        world.set_world_joint("cupboard_door_joint", 0.0)
+        assert world.link_outlines(door) is None  # closed: square to the axes

@@ -103,9 +103,9 @@ def occupancy_map(world: World, min_top_m: float = 0.0) -> OccupancyMap:
     links that count (carried objects at many heights share a few maps)."""
     key = ("occupancy", min_top_m, _joint_state(world))
     if key not in world.cache:
-        boxes = world.environment_boxes()
+        boxes = world.environment_footprints()  # (a door swung open: its outline)
         counted = tuple((name, tuple(np.round(lo, 4)), tuple(np.round(hi, 4)))
-                        for name, lo, hi in boxes
+                        for name, lo, hi, _ in boxes
                         if hi[2] <= FLOOR_HEIGHT_M or hi[2] > max(min_top_m, FLOOR_HEIGHT_M))
         same = ("occupancy of", counted)
         if same not in world.cache:

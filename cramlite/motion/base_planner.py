@@ -72,17 +72,43 @@ class BaseMotionPlanner:
         if all(self.checker.is_free(*p) for p in straight):
             return BasePath(straight)
         seed = int(rng.integers(1, 2**31 - 1))
-        # OMPL checks its motions coarsely first; every executed waypoint is checked, and if
-        # one collides, planning is repeated with the fine resolution
-        for resolution in dict.fromkeys((self.options.coarse_check_resolution,
-                                         self.options.check_resolution)):
-            coarse = self._ompl(start, goal, seed, resolution)
-            if coarse is None:
-                return None
-            waypoints = self._interpolate(coarse)
-            if all(self.checker.is_free(*p) for p in waypoints):
-                return BasePath(waypoints)
+        # OMPL checks its motions coarsely first; every executed waypoint is checked. If one
+        # collides, the segments of the path that do are planned again with the fine
+        # resolution (their ends are free), and failing that the whole path.
+        coarse_resolution = self.options.coarse_check_resolution
+        fine_resolution = self.options.check_resolution
+        coarse = self._ompl(start, goal, seed, coarse_resolution)
+        if coarse is None:
+            return None
+        if self._free(coarse):
+            return BasePath(self._interpolate(coarse))
+        if coarse_resolution != fine_resolution:
+            repaired = self._repair(coarse, seed, fine_resolution)
+            if repaired is not None and self._free(repaired):
+                return BasePath(self._interpolate(repaired))
+            fine = self._ompl(start, goal, seed, fine_resolution)
+            if fine is not None and self._free(fine):
+                return BasePath(self._interpolate(fine))
         return None
+
+    def _free(self, vertices: Sequence[BasePose]) -> bool:
+        """Is every waypoint along these vertices free?"""
+        return all(self.checker.is_free(*p) for p in self._interpolate(vertices))
+
+    def _repair(self, vertices: Sequence[BasePose], seed: int,
+                resolution: float) -> list[BasePose] | None:
+        """The path with each segment whose waypoints collide planned again (between its
+        free ends); None if one of them has no path."""
+        out = [tuple(vertices[0])]
+        for a, b in itertools.pairwise(vertices):
+            if self._free([a, b]):
+                out.append(tuple(b))
+                continue
+            detour = self._ompl(a, b, seed, resolution)
+            if detour is None:
+                return None
+            out.extend(detour[1:])
+        return out
 
     def _ompl(self, start: BasePose, goal: BasePose, seed: int,
               resolution: float) -> list[BasePose] | None:

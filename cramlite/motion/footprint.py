@@ -38,12 +38,13 @@ class Bounds2D:
 class OccupancyMap:
     """Boolean grid of the fixed world, inflated by a safety margin."""
 
-    def __init__(self, boxes: Iterable[tuple[str, Sequence[float], Sequence[float]]],
-                 resolution_m: float = 0.01, margin_m: float = 0.02,
-                 min_top_m: float = FLOOR_HEIGHT_M):
-        """`min_top_m`: only links whose top is higher count (a map for carried objects
-        held above the counters uses their height)."""
-        boxes = list(boxes)
+    def __init__(self, boxes: Iterable[tuple], resolution_m: float = 0.01,
+                 margin_m: float = 0.02, min_top_m: float = FLOOR_HEIGHT_M):
+        """`boxes`: (name, lower corner, upper corner) of each link, optionally with a
+        fourth element, the xy outlines (convex polygons) of a turned link, drawn instead of
+        its axis-aligned bounds. `min_top_m`: only links whose top is higher count (a map
+        for carried objects held above the counters uses their height)."""
+        boxes = [tuple(b) if len(b) > 3 else (*b, None) for b in boxes]
         floor = [b for b in boxes if b[2][2] <= FLOOR_HEIGHT_M]
         obstacles = [b for b in boxes if b[2][2] > max(min_top_m, FLOOR_HEIGHT_M)]
         source = floor or obstacles
@@ -54,10 +55,18 @@ class OccupancyMap:
         nx = math.ceil((self.bounds.x_max - self.bounds.x_min) / resolution_m) + 1
         ny = math.ceil((self.bounds.y_max - self.bounds.y_min) / resolution_m) + 1
         grid = np.zeros((nx, ny), dtype=bool)
-        for _, lo, hi in obstacles:
+        for _, lo, hi, outlines in obstacles:
             i0, j0 = self._cell(lo[0], lo[1])
             i1, j1 = self._cell(hi[0], hi[1])
-            grid[max(i0, 0):max(i1 + 1, 0), max(j0, 0):max(j1 + 1, 0)] = True
+            i0, j0, i1, j1 = max(i0, 0), max(j0, 0), max(i1 + 1, 0), max(j1 + 1, 0)
+            if outlines is None:
+                grid[i0:i1, j0:j1] = True
+                continue
+            xs = self.bounds.x_min + np.arange(i0, i1) * resolution_m
+            ys = self.bounds.y_min + np.arange(j0, j1) * resolution_m
+            cells = np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1)
+            for outline in outlines:
+                grid[i0:i1, j0:j1] |= _inside(cells, outline, resolution_m * 0.71)
         self.obstacles = grid
         if margin_m > 0:
             radius = math.ceil(margin_m / resolution_m)
@@ -115,13 +124,31 @@ class OccupancyMap:
         out[1:-1, 1:-1] = self.blocked
         return out
 
+    @functools.cached_property
+    def _lookup(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(flat bordered grid, offset, lowest and highest cell index) for `blocked_at`."""
+        grid = self._bordered
+        offset = np.array([self.bounds.x_min, self.bounds.y_min])
+        return (grid.ravel(), offset, np.array([-1.0, -1.0]),
+                np.array([grid.shape[0] - 2.0, grid.shape[1] - 2.0]))
+
     def blocked_at(self, xy: np.ndarray) -> np.ndarray:
         """True for points (N x 2) on blocked cells or outside the map."""
-        grid = self._bordered
-        idx = np.rint((xy - (self.bounds.x_min, self.bounds.y_min)) / self.resolution)
-        i = np.clip(idx[:, 0], -1, grid.shape[0] - 2).astype(np.intp) + 1
-        j = np.clip(idx[:, 1], -1, grid.shape[1] - 2).astype(np.intp) + 1
-        return grid[i, j]
+        flat, offset, lowest, highest = self._lookup
+        idx = np.rint((xy - offset) / self.resolution)
+        np.maximum(idx, lowest, out=idx)  # (np.clip's wrapper costs more than the work)
+        np.minimum(idx, highest, out=idx)
+        cells = idx.astype(np.intp) + 1
+        return flat[cells[:, 0] * (self.blocked.shape[1] + 2) + cells[:, 1]]
+
+
+def _inside(points: np.ndarray, outline: np.ndarray, slack: float) -> np.ndarray:
+    """Which points (... x 2) lie within `slack` of the convex hull of `outline` (N x 2)."""
+    from scipy.spatial import ConvexHull
+
+    hull = ConvexHull(np.asarray(outline, dtype=float))
+    normals, offsets = hull.equations[:, :2], hull.equations[:, 2]  # inside: n.x + d <= 0
+    return np.all(points @ normals.T + offsets <= slack, axis=-1)
 
 
 def square_outline(half_size: float, spacing: float) -> np.ndarray:
@@ -177,12 +204,18 @@ class FootprintChecker:
         self._known.clear()
         self.exact = exact
         self.carried_groups = []
+        # groups checked against the same map are checked together (one lookup a pose)
+        by_map: dict[int, tuple[OccupancyMap, list[np.ndarray]]] = {}
         for points, occupancy in groups:
             pts = np.asarray(points, dtype=float).reshape(-1, 2)
-            if len(pts):  # (how far they reach from the base's centre, with the margin)
+            if len(pts):
                 occupancy = occupancy or self.occupancy
-                reach = float(np.hypot(*pts.T).max()) + pad
-                self.carried_groups.append((pts, occupancy, occupancy.near(reach)))
+                by_map.setdefault(id(occupancy), (occupancy, []))[1].append(pts)
+        for occupancy, parts in by_map.values():
+            pts = np.vstack(parts)
+            # (how far they reach from the base's centre, with the margin)
+            reach = float(np.hypot(*pts.T).max()) + pad
+            self.carried_groups.append((pts, occupancy, occupancy.near(reach)))
 
     def is_free(self, x: float, y: float, yaw: float) -> bool:
         """Is the robot clear of the world at this base pose? (Answers are remembered

@@ -15,8 +15,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from cramlite.errors import SetupError
-from cramlite.world.bodies import RobotBody, Vec3, WorldObject, yaw_quat
+from cramlite.world.bodies import RobotBody, Vec3, WorldObject, quat_yaw, yaw_quat
 from cramlite.world.bullet import p
 from cramlite.world.containers import Container, containers_path, load_containers
 from cramlite.world.pr2 import pr2_urdf_path
@@ -31,6 +33,9 @@ PENETRATION_TOLERANCE_M = 0.005
 SURFACE_HEIGHT_TOLERANCE_M = 0.01
 #: The link of a world URDF the robot stands on (not a surface for items).
 FLOOR_LINK = "floor"
+#: A link turned further than this from square to the axes (|sin 2 yaw|, about 0.6
+#: degrees) is drawn on 2D maps by its outline rather than its axis-aligned bounds.
+TURNED_SIN = 0.02
 
 
 @dataclass(frozen=True)
@@ -264,6 +269,36 @@ class World:
                     tuple(c + h for c, h in zip(centre, span, strict=True)))
         lo, hi = p.getAABB(self.environment, index, physicsClientId=self.client)
         return tuple(lo), tuple(hi)
+
+    def link_outlines(self, index: int) -> list[np.ndarray] | None:
+        """The xy corners (as seen from above) of each box of a turned environment link (a
+        door swung open), where its axis-aligned bounds would cover far more than it does;
+        None for a link that stands square to the axes or is not made of boxes."""
+        shapes = p.getCollisionShapeData(self.environment, index, physicsClientId=self.client)
+        if index < 0 or not shapes or any(shape[2] != p.GEOM_BOX for shape in shapes):
+            return None
+        state = p.getLinkState(self.environment, index, physicsClientId=self.client)
+        if abs(math.sin(2 * quat_yaw(state[5]))) < TURNED_SIN:
+            return None
+        out = []
+        for shape in shapes:
+            centre, rotation = p.multiplyTransforms(state[4], state[5], shape[5], shape[6])
+            matrix = np.array(p.getMatrixFromQuaternion(rotation)).reshape(3, 3)
+            half = np.asarray(shape[3]) / 2
+            corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1)
+                                for sz in (-1, 1)]) * half
+            out.append((corners @ matrix.T + centre)[:, :2])
+        return out
+
+    def environment_footprints(self) -> list[tuple[str, Vec3, Vec3, list[np.ndarray] | None]]:
+        """`environment_boxes` with the outlines of the turned links (see `link_outlines`):
+        what 2D maps are drawn from."""
+        return [(name, lo, hi, self.link_outlines(index) if index in self._moving_links()
+                 else None) for name, index, lo, hi in self.environment_link_boxes()]
+
+    def _moving_links(self) -> set[int]:
+        self.environment_link_boxes()
+        return {index for _, index in self.cache["environment link boxes"][1]}
 
     def environment_boxes(self) -> list[tuple[str, Vec3, Vec3]]:
         """Axis-aligned bounds of every environment link (for 2D maps of fixed geometry)."""
