@@ -92,7 +92,8 @@ class CostmapLocation:
     def __init__(self, point: Vec3, grasp_heights: Mapping[str, float], obj: str,
                  arms: Sequence[str] = ARMS, purpose: str = PICK,
                  orientation: Quat = (0.0, 0.0, 0.0, 1.0), relative: Relative | None = None,
-                 angle_step_deg: float = 10.0, max_ik_checks: int = 24):
+                 angle_step_deg: float = 10.0, max_ik_checks: int = 24,
+                 max_ik_checks_if_none: int = 48):
         if purpose not in (PICK, PLACE):
             raise ValueError(f"purpose must be {PICK!r} or {PLACE!r}")
         if purpose == PLACE and relative is None:
@@ -106,7 +107,10 @@ class CostmapLocation:
         self.orientation = orientation
         self.relative = relative
         self.angle_step_deg = angle_step_deg
+        #: Candidates checked (IK and the arm's motions) before giving up, and how far to
+        #: go on while none has passed (near an open door most of the closest fail).
         self.max_ik_checks = max_ik_checks
+        self.max_ik_checks_if_none = max(max_ik_checks, max_ik_checks_if_none)
         self.rejected: dict[str, int] = dict.fromkeys(REJECTIONS, 0)
 
     def candidates(self, ctx: RobotContext) -> Iterator[tuple[float, BasePose, str, str]]:
@@ -139,18 +143,19 @@ class CostmapLocation:
         """Checked candidates, best first (lazily: work is done as they are asked for).
         Candidates whose motions between configurations need a planned detour (a straight
         joint-space path collides) come after all the others."""
-        ik_checks = 0
+        ik_checks, passed = 0, 0
         detours = []
         for _, base, arm, grasp in self.candidates(ctx):
             if not ctx.base_checker().is_free(*base):
                 self.rejected["footprint"] += 1
                 continue
-            if ik_checks >= self.max_ik_checks:
+            if ik_checks >= (self.max_ik_checks if passed else self.max_ik_checks_if_none):
                 break
             ik_checks += 1
             reach = self.reach_from(ctx, base, arm, grasp)
             if reach is None:
                 continue
+            passed += 1
             if reach.straight:
                 yield reach
             else:
