@@ -132,3 +132,15 @@ def test_run_writes_a_trace_the_replay_accepts(tmp_path: Path) -> None:
     assert {"drive_s", "arm_s", "actions"} <= set(data)
     names = {node["name"] for node in data["actions"]}
     assert {"ParkArmsAction", "MoveTorsoAction", "TransportAction"} <= names
+
+
+@pytest.mark.parametrize("option", ["--trace", "--image"])
+def test_run_refuses_a_folder_for_its_trace_or_image_before_running(tmp_path: Path,
+                                                                     option: str) -> None:
+    folder = tmp_path / ("t.jsonl" if option == "--trace" else "v1.png")
+    folder.mkdir()
+    result = run_cli("run", "v1", option, str(folder))
+    assert result.returncode == 2, result.stdout
+    assert "Traceback" not in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    assert f"{folder}: {option}: is a folder" in result.stderr
+    assert "success" not in result.stdout  # refused before the trial ran

@@ -33,6 +33,24 @@ def _save_image(image, path: str, option: str) -> str:
                              field=option) from None
 
 
+def _writable_file(path: str, option: str) -> None:
+    """Refuse, before a trial runs, a file it could not write at its end (a folder, a
+    read-only place)."""
+    from pathlib import Path
+
+    target = Path(path)
+    if target.is_dir():
+        raise UserInputError("is a folder; expected the name of a file to write",
+                             source=path, field=option)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with target.open("a", encoding="utf-8"):
+            pass
+    except OSError as exc:
+        raise UserInputError(f"cannot write it ({exc.strerror or exc})", source=path,
+                             field=option) from None
+
+
 def cmd_show(args: argparse.Namespace) -> int:
     from cramlite.world import World, load_setup
 
@@ -79,6 +97,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     params = parse_params(args.params)
     strategy_checked(args.strategy, params=params, dims=args.dims)
     setup = load_setup(args.setup)
+    for path, option in ((args.trace, "--trace"), (args.image, "--image")):
+        if path:
+            _writable_file(path, option)
     from cramlite.designators.context import ExecutionOptions
 
     options = ExecutionOptions(keep_containers_open=args.keep_open)
