@@ -83,3 +83,23 @@ def test_protocol_option_is_offered_and_checked() -> None:
                  "--params", "c=1.4", "--json")
     assert ok.returncode == 0, ok.stderr
     assert '"protocol": "reference"' in ok.stdout
+
+
+@pytest.mark.parametrize("args, option", [
+    (["fit", "table-setting", "--out", "{file}/sub"], "--out"),
+    (["compare", "table-setting", "--strategies", "opm,nearest", "--out", "{file}/sub"],
+     "--out"),
+    (["train", "table-setting", "--model", "cpt", "--out", "{file}/m.model"], "--out"),
+    (["train", "table-setting", "--model", "cpt", "--out", "{folder}"], "--out"),
+    (["fit", "table-setting", "--dims", ","], "--dims"),
+])
+def test_outputs_that_cannot_be_written_are_refused_before_the_work(tmp_path, args,
+                                                                    option) -> None:
+    afile, folder = tmp_path / "a.txt", tmp_path / "f"
+    afile.write_text("a file")
+    folder.mkdir()
+    args = [a.format(file=afile, folder=folder) for a in args]
+    result = run_cli(*args)
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    assert f"{option}:" in result.stderr

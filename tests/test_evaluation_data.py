@@ -99,3 +99,17 @@ def test_cli_reports_bad_rows_by_id_and_field(tmp_path: Path) -> None:
     assert "skipped" in skipped.stderr and "k02" in skipped.stderr
     missing = run_cli("evaluate", str(tmp_path / "none.csv"))
     assert missing.returncode == 2 and "none.csv" in missing.stderr
+
+
+def test_duplicate_episode_ids_are_refused_or_skipped(tmp_path: Path) -> None:
+    """Results are keyed and paired by ID (compare's Wilcoxon pairs): two episodes with
+    one ID once gave both the second one's scores."""
+    twice = ["k01", *CLEANING[1:]]
+    path = write_csv(tmp_path, CLEANING, COOKING, twice)
+    with pytest.raises(DataError, match="duplicate") as info:
+        load_episodes(path)
+    assert info.value.field == "ID"
+    episodes, bad = load_episodes(path, on_bad_row="skip")
+    assert [e.id for e in episodes] == ["k01", "s13-d21"] and bad[0].field == "ID"
+    result = run_cli("compare", str(path), "--strategies", "opm,nearest", "--repeats", "1")
+    assert result.returncode == 2 and "row k01: ID: duplicate" in result.stderr

@@ -178,6 +178,22 @@ def test_model_of_another_format_version_is_refused(models, tmp_path) -> None:
     assert result.returncode == 2 and "format_version" in result.stderr
 
 
+@pytest.mark.parametrize("field, value", [("data", None), ("split", None),
+                                          ("split", {"ids": {"test": [1, 2]}})])
+def test_model_with_bad_metadata_is_refused_when_it_loads(models, tmp_path, field,
+                                                          value) -> None:
+    path = tmp_path / "tampered.model"
+    with zipfile.ZipFile(models["cpt"]) as old, zipfile.ZipFile(path, "w") as new:
+        meta = json.loads(old.read("model.json"))
+        meta[field] = value
+        new.writestr("model.json", json.dumps(meta))
+        new.writestr("sequences.json", old.read("sequences.json"))
+    with pytest.raises(ModelFileError, match=f"{field}: expected"):
+        load_model(path)
+    result = run_cli("evaluate", "table-setting", "--strategy", f"learned:{path}")
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+
+
 def test_train_refuses_bad_input(tmp_path) -> None:
     nocols = tmp_path / "nocols.csv"
     nocols.write_text("ID,sequence\nx,a\n")

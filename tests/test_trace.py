@@ -144,3 +144,33 @@ def test_run_refuses_a_folder_for_its_trace_or_image_before_running(tmp_path: Pa
     assert "Traceback" not in result.stderr and len(result.stderr.strip().splitlines()) == 1
     assert f"{folder}: {option}: is a folder" in result.stderr
     assert "success" not in result.stdout  # refused before the trial ran
+
+
+def test_replay_check_finds_an_item_sunk_into_the_counter_or_another_item(
+        tmp_path: Path) -> None:
+    """Items standing (not in hand) are checked too, wherever they moved."""
+    sunk = tmp_path / "sunk.jsonl"
+    writer = TraceWriter(sunk, header())
+    writer.write_state(0.0, [-0.5, -1.8, 0.0], [0.25, -1.7], [], {},
+                       {"cup": [1.45, 0.85, 0.6, 0.0, 0.0, 0.0, 1.0]}, None)
+    writer.close()
+    result = run_cli("replay", str(sunk), "--check")
+    assert result.returncode == 1 and "'cup'" in result.stdout and "counter" in result.stdout
+
+
+def test_replay_check_says_when_a_contact_is_between_two_states(tmp_path: Path) -> None:
+    # both states clear of the island, the straight drive between them through it
+    through = write(tmp_path / "through.jsonl", [(0.0, [-0.2, 1.3, math.pi]),
+                                                 (2.0, [-2.0, 1.3, math.pi])])
+    result = run_cli("replay", str(through), "--check")
+    print(result.stdout)
+    assert result.returncode == 1
+    assert "at t = 1.00 s (between lines 2 and 3)" in result.stdout
+
+
+def test_replay_refuses_an_output_it_cannot_write_before_rendering(tmp_path: Path) -> None:
+    path = write(tmp_path / "t.jsonl", [(0.0, [-0.5, -1.8, 0.0])])
+    (tmp_path / "out.gif").mkdir()
+    result = run_cli("replay", str(path), "--out", str(tmp_path / "out.gif"))
+    assert result.returncode == 2 and "--out: is a folder" in result.stderr
+    assert "Traceback" not in result.stderr

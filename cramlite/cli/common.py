@@ -136,3 +136,45 @@ def image_path(text: str) -> str:
 
 positive_int = int_at_least(1, "a positive integer")
 non_negative_int = int_at_least(0, "a whole number >= 0")
+
+
+def writable_file(text: str, option: str) -> None:
+    """Refuse, before any work, a file that could not be written at the end: a folder, a
+    path under a file, a read-only place (its folders are made)."""
+    from pathlib import Path
+
+    target = Path(text)
+    if target.is_dir():
+        raise UserInputError("is a folder; expected the name of a file to write",
+                             source=text, field=option)
+    under = next((parent for parent in target.parents if parent.is_file()), None)
+    if under is not None:
+        raise UserInputError(f"is under a file ({under}); expected a file in a folder",
+                             source=text, field=option)
+    existed = target.exists()
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with target.open("a", encoding="utf-8"):
+            pass
+    except OSError as exc:
+        raise UserInputError(f"cannot write it ({exc.strerror or exc})", source=text,
+                             field=option) from None
+    if not existed:
+        target.unlink()  # (only probed: the command writes it when it is done)
+
+
+def writable_folder(text: str, option: str = "--out"):
+    """A folder to write into, made now (with its parents): refuses a file, a path under
+    a file, a read-only place."""
+    from pathlib import Path
+
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise UserInputError("expected a folder (or a new path), got an existing file",
+                             source=text, field=option)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UserInputError(f"cannot make the folder ({exc.strerror or exc})", source=text,
+                             field=option) from None
+    return path

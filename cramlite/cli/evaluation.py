@@ -16,6 +16,7 @@ from cramlite.cli.common import (
     positive_int,
     progress_bar,
     strategy_checked,
+    writable_folder,
 )
 from cramlite.errors import UserInputError
 from cramlite.evaluation.options import DIM_NAMES, METRICS, PROTOCOLS
@@ -34,12 +35,9 @@ def quiet_broken_pipe() -> Iterator[None]:
 
 
 def out_folder(text: str, option: str = "--out") -> Path:
-    """A folder to write into: refuses a path that is a file."""
-    path = Path(text)
-    if path.exists() and not path.is_dir():
-        raise UserInputError("expected a folder (or a new path), got an existing file",
-                             source=text, field=option)
-    return path
+    """A folder to write into (made now): refuses a file, a path under a file, a
+    read-only place, before any work is done."""
+    return writable_folder(text, option)
 
 
 def _load_episodes(args: argparse.Namespace):
@@ -119,6 +117,9 @@ def cmd_fit(args: argparse.Namespace) -> int:
     from cramlite.evaluation.report import write_fit
 
     dims = [d.strip() for d in args.dims.split(",") if d.strip()]
+    if not dims:
+        raise UserInputError(f"expected a comma-separated list of {', '.join(DIM_NAMES)}, "
+                             f"got {args.dims!r}", field="--dims")
     for d in dims:
         if d not in DIM_NAMES:
             raise UserInputError(f"unknown projection {d!r}; expected a comma-separated list "

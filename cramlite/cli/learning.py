@@ -12,6 +12,7 @@ from cramlite.cli.common import (
     positive_int,
     progress_bar,
     strategy_checked,
+    writable_file,
 )
 from cramlite.cli.evaluation import add_protocol_argument, out_folder, quiet_broken_pipe
 from cramlite.errors import UserInputError
@@ -33,6 +34,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     from cramlite.learning.train import parse_split, train_model
 
     split = parse_split(args.split)
+    writable_file(args.out, "--out")
     report = train_model(_data_path(args.data), args.model, args.out, seed=args.seed,
                          split=split, epochs=args.epochs)
     with quiet_broken_pipe():

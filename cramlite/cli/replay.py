@@ -5,7 +5,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from cramlite.cli.common import EXIT_OK, EXIT_PLAN_FAILED, Parser, command_help
+from cramlite.cli.common import (
+    EXIT_OK,
+    EXIT_PLAN_FAILED,
+    Parser,
+    command_help,
+    writable_file,
+)
 from cramlite.errors import UserInputError
 
 MAX_SIDE_PX = 4096
@@ -41,6 +47,8 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if args.out and not args.out.lower().endswith(".gif"):
         raise UserInputError(f"expected a file name ending in .gif, got {args.out!r}",
                              field="--out")
+    if args.out:
+        writable_file(args.out, "--out")
     status = EXIT_OK
     if args.check:
         from cramlite.trace.replay import penetrations

@@ -13,6 +13,7 @@ from cramlite.cli.common import (
     non_negative_int,
     parse_params,
     strategy_checked,
+    writable_file,
 )
 from cramlite.errors import UserInputError
 from cramlite.plan_names import PLAN_NAMES
@@ -30,24 +31,6 @@ def _save_image(image, path: str, option: str) -> str:
     except (OSError, ValueError) as exc:
         reason = getattr(exc, "strerror", None) or str(exc)
         raise UserInputError(f"cannot write the image ({reason})", source=path,
-                             field=option) from None
-
-
-def _writable_file(path: str, option: str) -> None:
-    """Refuse, before a trial runs, a file it could not write at its end (a folder, a
-    read-only place)."""
-    from pathlib import Path
-
-    target = Path(path)
-    if target.is_dir():
-        raise UserInputError("is a folder; expected the name of a file to write",
-                             source=path, field=option)
-    try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        with target.open("a", encoding="utf-8"):
-            pass
-    except OSError as exc:
-        raise UserInputError(f"cannot write it ({exc.strerror or exc})", source=path,
                              field=option) from None
 
 
@@ -99,7 +82,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     setup = load_setup(args.setup)
     for path, option in ((args.trace, "--trace"), (args.image, "--image")):
         if path:
-            _writable_file(path, option)
+            writable_file(path, option)
     from cramlite.designators.context import ExecutionOptions
 
     options = ExecutionOptions(keep_containers_open=args.keep_open)

@@ -213,9 +213,15 @@ def load_episodes(path: str | Path, on_bad_row: str = "fail",
     if on_bad_row not in ("fail", "skip"):
         raise ValueError("on_bad_row must be 'fail' or 'skip'")
     episodes, bad = [], []
+    seen: set[str] = set()
     for row in iter_rows(path):
         try:
-            episodes.append(parse_row(row))
+            episode = parse_row(row)
+            if episode.id in seen:  # (results are keyed and paired by ID)
+                raise DataError("duplicate; expected every episode to have its own ID",
+                                source=f"row {episode.id}", field="ID")
+            seen.add(episode.id)
+            episodes.append(episode)
         except DataError as exc:
             if on_bad_row == "fail":
                 raise DataError(exc.detail, source=f"{path}: {exc.source}",

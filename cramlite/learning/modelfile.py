@@ -115,6 +115,16 @@ def _load(path: str, mtime_ns: int, size: int) -> LearnedModel:
             if not isinstance(vocab, list) or not vocab or \
                     not all(isinstance(v, str) for v in vocab):
                 raise fail("expected a non-empty list of item names", "vocabulary")
+            data = meta.get("data", {})
+            if not isinstance(data, dict) or not isinstance(data.get("sha256", ""), str):
+                raise fail("expected an object with the training file's name and sha256",
+                           "data")
+            split = meta.get("split", {"ids": {"test": []}})
+            test = split.get("ids", {}).get("test") if isinstance(split, dict) and \
+                isinstance(split.get("ids"), dict) else None
+            if not isinstance(test, list) or not all(isinstance(i, str) for i in test):
+                raise fail("expected the episode IDs of the split (ids.test: a list of IDs)",
+                           "split")
             if kind == "cpt":
                 sequences = json.loads(archive.read("sequences.json").decode("utf-8"))
                 net: RNNModel | NNModel | CPTModel = CPTModel(sequences, vocab)

@@ -147,10 +147,13 @@ class Penetration:
     depth_m: float
     t: float
     line: int  #: the trace line of the state (or the motion that starts there)
+    between: bool = False  #: found on the motion from that line's state to the next
 
     def describe(self) -> str:
+        where = f"between lines {self.line} and {self.line + 1}" if self.between \
+            else f"line {self.line}"
         return (f"{self.what} {self.depth_m * 100:.1f} cm inside {self.other} at t = "
-                f"{self.t:.2f} s (line {self.line})")
+                f"{self.t:.2f} s ({where})")
 
 
 def _interpolate(a: dict[str, Any], b: dict[str, Any], s: float) -> dict[str, Any]:
@@ -168,7 +171,8 @@ def _interpolate(a: dict[str, Any], b: dict[str, Any], s: float) -> dict[str, An
             qb = -qb
         quat = qa + s * (qb - qa)
         objects[name] = [*position, *(quat / np.linalg.norm(quat))]
-    return {**a, "base": base, "q": q, "w": w, "objects": objects}
+    return {**a, "t": a["t"] + s * (b["t"] - a["t"]), "base": base, "q": q, "w": w,
+            "objects": objects}
 
 
 def penetrations(trace: Trace, tolerance_m: float = 0.01, substeps: int = 2,
@@ -196,10 +200,11 @@ def _scan(trace: Trace, world: World, tolerance_m: float, substeps: int) -> list
     link_names[-1] = "base"
     worst: dict[tuple[str, str], Penetration] = {}
 
-    def note(what: str, other: str, depth: float, state: dict[str, Any], line: int) -> None:
+    def note(what: str, other: str, depth: float, state: dict[str, Any], line: int,
+             between: bool) -> None:
         key = (what, other)
         if depth > tolerance_m and (key not in worst or depth > worst[key].depth_m):
-            worst[key] = Penetration(what, other, depth, state["t"], line)
+            worst[key] = Penetration(what, other, depth, state["t"], line, between)
 
     def deepest(a: int, b: int) -> dict[tuple[int, int], float]:
         out: dict[tuple[int, int], float] = {}
@@ -211,26 +216,47 @@ def _scan(trace: Trace, world: World, tolerance_m: float, substeps: int) -> list
 
     handles = {name: world.environment_links[c.handle] for name, c in world.containers.items()}
 
-    def check(state: dict[str, Any], line: int) -> None:
+    #: where each item not in hand was last checked against the kitchen and the others
+    checked_at: dict[str, list[float]] = {}
+
+    def check(state: dict[str, Any], line: int, between: bool = False) -> None:
         apply_state(world, joints, state, world_joints)
         held = set(state["held"])
         action = state.get("action") or {}
         manipulated = action.get("object")
         grasped = handles.get(manipulated)  # opening a container: its handle is in hand
+
+        def found(what: str, other: str, depth: float) -> None:
+            note(what, other, depth, state, line, between)
+
         for (la, lb), depth in deepest(robot, env).items():
             if lb != grasped:
-                note(link_names[la], env_names.get(lb, "the kitchen"), depth, state, line)
+                found(link_names[la], env_names.get(lb, "the kitchen"), depth)
         for name, body in bodies.items():
             if name in held:
                 for (_, lb), depth in deepest(body, env).items():
-                    note(repr(name), env_names.get(lb, "the kitchen"), depth, state, line)
+                    found(repr(name), env_names.get(lb, "the kitchen"), depth)
                 for other, other_body in bodies.items():
                     if other != name and other != manipulated:
                         for _, depth in deepest(body, other_body).items():
-                            note(repr(name), repr(other), depth, state, line)
-            elif name != manipulated:
+                            found(repr(name), repr(other), depth)
+                continue
+            if name != manipulated:
                 for (la, _), depth in deepest(robot, body).items():
-                    note(link_names[la], repr(name), depth, state, line)
+                    found(link_names[la], repr(name), depth)
+            # an item standing somewhere (or sliding with a drawer): checked where it moved
+            pose = state["objects"].get(name)
+            last = checked_at.get(name)
+            if pose is None or (last is not None and max(
+                    abs(x - y) for x, y in zip(pose, last, strict=True)) < 1e-3):
+                continue
+            checked_at[name] = list(pose)
+            for (_, lb), depth in deepest(body, env).items():
+                found(repr(name), env_names.get(lb, "the kitchen"), depth)
+            for other, other_body in bodies.items():
+                if other != name and other not in held:
+                    for _, depth in deepest(body, other_body).items():
+                        found(repr(name), repr(other), depth)
 
     states = trace.states
     for i, state in enumerate(states):
@@ -242,7 +268,7 @@ def _scan(trace: Trace, world: World, tolerance_m: float, substeps: int) -> list
             for k in range(1, substeps):
                 mid = _interpolate(state, nxt, k / substeps)
                 _carry_held(world, joints, world_joints, mid, held_pose)
-                check(mid, line)
+                check(mid, line, between=True)
     return sorted(worst.values(), key=lambda f: -f.depth_m)
 
 
