@@ -235,3 +235,21 @@ def test_an_open_door_is_drawn_on_the_map_by_its_outline_not_its_bounds() -> Non
         assert not grid.blocked_at(np.array([far + inward]))[0]
         world.set_world_joint("cupboard_door_joint", 0.0)
         assert world.link_outlines(door) is None  # closed: square to the axes
+
+
+def test_a_container_the_free_hand_cannot_open_is_opened_with_both_hands_free() -> None:
+    """Putting the spoon back into the cupboard, the left hand holds it and the right one
+    cannot reach the door's handle: the spoon is put down, the cupboard opened, and the
+    spoon fetched again."""
+    setup = Path(__file__).parent / "one_hand_cupboard.yaml"
+    result = run_cli("run", str(setup), "--plan", "clear-table", "--strategy", "opm",
+                     "--json")
+    data = json.loads(result.stdout)
+    assert result.returncode == 0 and data["success"], data["failures"]
+    spoon = next(n for n in data["actions"]
+                 if n["name"] == "TransportAction" and n["object"] == "spoon")
+    steps = [(c["name"], c["status"]) for c in spoon["children"]]
+    failed = steps.index(("OpenAction", "failed"))
+    assert steps[failed + 1:].index(("OpenAction", "succeeded")) < \
+        steps[failed + 1:].index(("PickUpAction", "succeeded"))
+    assert steps[-1] == ("CloseAction", "succeeded")

@@ -274,7 +274,18 @@ class TransportAction:
         to_close = [c for c in to_close if not _closed_now(ctx, CloseAction, c)]
         try:
             if destination is not None and not is_open(ctx, destination):
-                OpenAction(destination.name).perform(ctx)
+                try:
+                    OpenAction(destination.name).perform(ctx)
+                except PlanFailure as failure:
+                    # the free hand alone cannot open it: put the item back, open it with
+                    # both hands free, and fetch the item again
+                    ctx.note(f"cannot open {destination.name} with one hand full "
+                             f"({failure}); opening it first")
+                    self._put_back(ctx, obj, origin, picked_from)
+                    ParkArmsAction().perform(ctx)
+                    OpenAction(destination.name).perform(ctx)
+                    target = _at(ctx, destination, local)
+                    picked_from, planned = self._fetch(ctx, obj, target, None, local)
                 target = _at(ctx, destination, local)
             self._deliver(ctx, obj, planned, target)
         except PlanFailure:
