@@ -201,7 +201,7 @@ def test_train_refuses_bad_input(tmp_path) -> None:
         (["train", str(nocols), "--model", "nn", "--out", str(tmp_path / "m")],
          "missing column"),
         (["train", "table-setting", "--model", "nn", "--out", str(tmp_path)],
-         "--out: expected a model file path"),
+         "--out: is a folder"),
         (["train", "table-setting", "--model", "nn", "--out", str(tmp_path / "m"),
           "--split", "0.5,0.5"], "--split: expected three fractions"),
         (["train", "table-setting", "--model", "svm", "--out", str(tmp_path / "m")],
