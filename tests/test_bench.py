@@ -481,3 +481,17 @@ def test_random_setups_store_items_in_the_containers_and_are_all_valid(tmp_path:
     print(len(stored), [(i["name"], i["in"]) for i in stored])
     assert {i["in"] for i in stored} == {"drawer_1", "drawer_2", "cupboard"}
     assert all(i["name"] in ("spoon", "cup", "bowl") for i in stored if i["in"] != "cupboard")
+
+
+def test_summary_shows_a_dash_where_no_trial_succeeded() -> None:
+    from cramlite.bench.summary import summarise, write_summary
+
+    rows = [{"setup": "unreachable", "strategy": "opm", "success": "False", "order": "cup",
+             "wall_s": "1.5", "robot_time_s": "120.0", "drive_s": "20", "arm_s": "99",
+             "open_close_s": "0", "base_path_m": "9", "straight_line_m": "9"}]
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        text = write_summary(Path(folder), summarise(rows, {}), [], [])
+    line = next(x for x in text.splitlines() if x.startswith("| unreachable"))
+    assert "nan" not in line and "| 0% | – / – |" in line

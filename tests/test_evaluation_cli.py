@@ -103,3 +103,8 @@ def test_outputs_that_cannot_be_written_are_refused_before_the_work(tmp_path, ar
     assert result.returncode == 2, result.stderr
     assert "Traceback" not in result.stderr and len(result.stderr.strip().splitlines()) == 1
     assert f"{option}:" in result.stderr
+
+
+def test_compare_refuses_a_strategy_named_twice() -> None:
+    result = run_cli("compare", "table-setting", "--strategies", "opm,nearest,opm")
+    assert result.returncode == 2 and "--strategies: opm named twice" in result.stderr

@@ -35,6 +35,12 @@ def test_malformed_yaml(tmp_path: Path) -> None:
     _assert_user_error(run_cli("show", str(path)), str(path), "line", "YAML")
 
 
+def test_a_key_given_twice_is_refused(tmp_path: Path, setup_text: str) -> None:
+    # (YAML would keep the last one: this setup would silently be named "twice")
+    path = _write(tmp_path, setup_text.replace("\nitems:", "\nname: twice\nitems:", 1))
+    _assert_user_error(run_cli("show", str(path)), str(path), "line", "'name' appears twice")
+
+
 def test_unknown_category(tmp_path: Path, setup_text: str) -> None:
     path = _write(tmp_path, setup_text.replace("category: mid", "category: utensil"))
     _assert_user_error(run_cli("show", str(path)), str(path), "items[4].category",

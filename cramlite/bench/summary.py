@@ -129,22 +129,29 @@ def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[
              "driving s | arm s | open/close s | driven path m | straight-line m | "
              "edit vs baseline | order |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+
+    def two(value: float) -> str:  # (no successful trial: nothing to measure)
+        return f"{value:.2f}" if np.isfinite(value) else "–"
+
     for e in summary:
+        e = {k: two(v) if isinstance(v, float) and k != "success_rate" else v
+             for k, v in e.items()}
         lines.append(
             f"| {e['setup']} | {e['strategy']} | {e['trials']} | {e['success_rate']:.0%} | "
-            f"{e['wall_s_mean']:.2f} / {e['wall_s_median']:.2f} | "
-            f"{e['robot_time_s_mean']:.2f} / {e['robot_time_s_median']:.2f} | "
-            f"{e['drive_s_mean']:.2f} | {e['arm_s_mean']:.2f} | "
-            f"{e['open_close_s_mean']:.2f} | "
-            f"{e['base_path_m_mean']:.2f} / {e['base_path_m_median']:.2f} | "
-            f"{e['straight_line_m_mean']:.2f} / {e['straight_line_m_median']:.2f} | "
-            f"{e['edit_vs_baseline']:.2f} | {e['order']} |")
+            f"{e['wall_s_mean']} / {e['wall_s_median']} | "
+            f"{e['robot_time_s_mean']} / {e['robot_time_s_median']} | "
+            f"{e['drive_s_mean']} | {e['arm_s_mean']} | "
+            f"{e['open_close_s_mean']} | "
+            f"{e['base_path_m_mean']} / {e['base_path_m_median']} | "
+            f"{e['straight_line_m_mean']} / {e['straight_line_m_median']} | "
+            f"{e['edit_vs_baseline']} | {e['order']} |")
     lines.append("")
     lines.append("Driven path: length of the base paths actually executed. Straight-line: sum "
                  "over steps of the xy distances robot -> item -> where it was put. Robot time: "
                  "wall time + driving time (base trajectories at 1.0 m/s, 1 rad/s) + arm time "
                  "(arm, torso and gripper trajectories timed from the URDF's limits); "
-                 "open/close: the part of it spent opening and closing drawers and doors.")
+                 "open/close: the part of it spent opening and closing drawers and doors. "
+                 "Times and lengths are of the successful trials (–: none succeeded).")
     for test in tests:
         lines += ["", f"Wilcoxon signed-rank, {test['strategy']} vs {test['reference']} "
                       f"({test['pairs']} pairs by setup and trial):"]
@@ -167,7 +174,7 @@ def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[
                          f"{e['straight_line_m_percentile']:.0f} %, robot time "
                          f"{e['robot_time_s_percentile']:.0f} % of {e['orders']} orders")
     text = "\n".join(lines) + "\n"
-    (folder / "summary.md").write_text(text)
+    (folder / "summary.md").write_text(text, encoding="utf-8")
     (folder / "tests.json").write_text(json.dumps({"wilcoxon": tests,
                                                    "all_orders": percentiles}, indent=2))
     return text

@@ -67,6 +67,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if len(strategies) < 2:
         raise UserInputError(f"expected at least two comma-separated strategies, got "
                              f"{args.strategies!r}", field="--strategies")
+    twice = sorted({n for n in strategies if strategies.count(n) > 1})
+    if twice:
+        raise UserInputError(f"{', '.join(twice)} named twice; expected different strategies "
+                             "to compare", field="--strategies")
     for name in strategies:
         strategy_checked(name)
     out = out_folder(args.out) if args.out else None
