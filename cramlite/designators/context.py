@@ -97,6 +97,12 @@ def _joint_state(world: World) -> tuple[float, ...]:
     return tuple(round(v, 3) for v in world.world_joint_positions().values())
 
 
+#: 2D maps kept for the process, at most (about 1 MB each; a map is a pure function of
+#: the boxes and outlines it is drawn from).
+SHARED_MAPS = 48
+_MAPS: dict[tuple, OccupancyMap] = {}
+
+
 def occupancy_map(world: World, min_top_m: float = 0.0) -> OccupancyMap:
     """The world's 2D map as its drawers and doors stand now (only links whose top is
     above `min_top_m` count), cached per world: by height and joint state, and by the
@@ -104,13 +110,20 @@ def occupancy_map(world: World, min_top_m: float = 0.0) -> OccupancyMap:
     key = ("occupancy", min_top_m, _joint_state(world))
     if key not in world.cache:
         boxes = world.environment_footprints()  # (a door swung open: its outline)
-        counted = tuple((name, tuple(np.round(lo, 4)), tuple(np.round(hi, 4)))
-                        for name, lo, hi, _ in boxes
+        counted = tuple((name, tuple(np.round(lo, 4)), tuple(np.round(hi, 4)),
+                         None if outlines is None else
+                         tuple(tuple(np.round(o, 4).ravel()) for o in outlines))
+                        for name, lo, hi, outlines in boxes
                         if hi[2] <= FLOOR_HEIGHT_M or hi[2] > max(min_top_m, FLOOR_HEIGHT_M))
-        same = ("occupancy of", counted)
-        if same not in world.cache:
-            world.cache[same] = OccupancyMap(boxes, min_top_m=min_top_m)
-        world.cache[key] = world.cache[same]
+        # (maps are kept for the process too, by what they are drawn from: another world
+        # of the same kitchen, e.g. the next setup a bench worker loads, reuses them)
+        found = _MAPS.get(counted)
+        if found is None:
+            found = OccupancyMap(boxes, min_top_m=min_top_m)
+            if len(_MAPS) >= SHARED_MAPS:
+                _MAPS.clear()
+            _MAPS[counted] = found
+        world.cache[key] = found
     return world.cache[key]
 
 

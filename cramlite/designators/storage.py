@@ -49,6 +49,11 @@ HANDLE_CLEARANCE_M = 0.10
 MAX_SQUINT_RAD = math.radians(60)
 #: Stages of the opening at which the base pose must be clear of the drawer or door.
 FOOTPRINT_STAGES = 5
+#: Handle IK chains kept for the process, at most (a pure function of the handle's poses,
+#: the base pose, the arm and the torso; thousands of solves for a cupboard's door).
+SHARED_HANDLE_IK = 20_000
+_HANDLE_IK: dict[tuple, tuple[list[dict[str, float]], dict, dict] | None] = {}
+_UNSOLVED = object()
 
 
 @dataclass(frozen=True)
@@ -189,8 +194,18 @@ class AccessingLocation:
                tuple(round(v, 4) for v in base), arm, round(torso, 4))
         cache = ctx.world.cache
         if key not in cache:
-            rng = np.random.default_rng([zlib.crc32(repr(key).encode())])
-            cache[key] = _handle_ik(arm, base, torso, path, rng)
+            # (also kept for the process, by the handle's poses themselves: another world
+            # of the same kitchen, e.g. the next setup a bench worker loads, reuses it)
+            shared = (key, tuple(tuple(np.round(pose.homogeneous[:3].ravel(), 5))
+                                 for pose in path.poses))
+            chain = _HANDLE_IK.get(shared, _UNSOLVED)
+            if chain is _UNSOLVED:  # (threads of one worker may both solve it: same answer)
+                rng = np.random.default_rng([zlib.crc32(repr(key).encode())])
+                chain = _handle_ik(arm, base, torso, path, rng)
+                if len(_HANDLE_IK) >= SHARED_HANDLE_IK:
+                    _HANDLE_IK.clear()
+                _HANDLE_IK[shared] = chain
+            cache[key] = chain
         return cache[key]
 
 
