@@ -293,12 +293,10 @@ class World:
     def environment_footprints(self) -> list[tuple[str, Vec3, Vec3, list[np.ndarray] | None]]:
         """`environment_boxes` with the outlines of the turned links (see `link_outlines`):
         what 2D maps are drawn from."""
-        return [(name, lo, hi, self.link_outlines(index) if index in self._moving_links()
-                 else None) for name, index, lo, hi in self.environment_link_boxes()]
-
-    def _moving_links(self) -> set[int]:
-        self.environment_link_boxes()
-        return {index for _, index in self.cache["environment link boxes"][1]}
+        static, moving = self._environment_links_by_motion()
+        return [(name, lo, hi, None) for name, _, lo, hi in static] + \
+            [(name, *self.link_bounds(index), self.link_outlines(index))
+             for name, index in moving]
 
     def environment_boxes(self) -> list[tuple[str, Vec3, Vec3]]:
         """Axis-aligned bounds of every environment link (for 2D maps of fixed geometry)."""
@@ -307,6 +305,13 @@ class World:
     def environment_link_boxes(self) -> list[tuple[str, int, Vec3, Vec3]]:
         """(name, link index, bounds) of every environment link with a shape; the links
         that never move are measured once, those on a drawer or door every time."""
+        static, moving = self._environment_links_by_motion()
+        return static + [(name, index, *self.link_bounds(index)) for name, index in moving]
+
+    def _environment_links_by_motion(self) -> tuple[list[tuple[str, int, Vec3, Vec3]],
+                                                    list[tuple[str, int]]]:
+        """The environment links with a shape: those that never move with their bounds
+        (measured once), and those on a drawer or door (name, index)."""
         key = "environment link boxes"
         if key not in self.cache:
             static, moving = [], []
@@ -326,8 +331,7 @@ class World:
                 else:
                     static.append((name, index, *self.link_bounds(index)))
             self.cache[key] = (static, moving)
-        static, moving = self.cache[key]
-        return static + [(name, index, *self.link_bounds(index)) for name, index in moving]
+        return self.cache[key]
 
     def penetration(self, body_a: int, body_b: int, link_b: int | None = None) -> float:
         """Deepest penetration (m, >= 0) between two bodies; 0 when they do not overlap."""
