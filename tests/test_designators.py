@@ -21,7 +21,6 @@ from cramlite.designators import (
     PlacingLocation,
     PlanFailure,
     Sequential,
-    SimulatedProcessModules,
     TransportAction,
     TryInOrder,
     simulated_robot,
@@ -31,6 +30,7 @@ from cramlite.designators.motions import AttachMotion, MoveArmJointsMotion
 from cramlite.motion.ik import arm_ik, tool_frame
 from cramlite.world import World, load_setup
 from cramlite.world.bullet import p
+from tests.injected import NavigationFailsOnce
 
 
 @pytest.fixture
@@ -182,20 +182,6 @@ def test_transport_moves_an_object_to_its_target(world) -> None:
         TransportAction("bowl", target=(-0.85, 1.24, 0.86)).perform(ctx)
         assert world.objects["bowl"].position() == pytest.approx((-0.85, 1.24, 0.86), abs=0.05)
         assert not ctx.holding
-
-
-class NavigationFailsOnce(SimulatedProcessModules):
-    """Injected failure: the first drive is refused (say, a person steps in the way)."""
-
-    def __init__(self, world):
-        super().__init__(world)
-        self.refused = 0
-
-    def execute_base_trajectory(self, trajectory, on_state=None):
-        if self.refused == 0:
-            self.refused += 1
-            raise NavigationFailed("path blocked by a person (injected)")
-        super().execute_base_trajectory(trajectory, on_state)
 
 
 def test_transport_falls_through_to_the_next_candidate(world) -> None:

@@ -19,6 +19,7 @@ from cramlite.trial import TrialRunner
 from cramlite.world import World, load_setup
 from cramlite.world.bullet import p
 from tests.conftest import run_cli
+from tests.injected import NavigationFailsOnce
 
 
 @pytest.fixture(scope="module")
@@ -87,24 +88,10 @@ def test_open_and_close_each_container(c2_world, tmp_path: Path) -> None:
 
 
 def test_opening_falls_through_when_the_first_accessing_pose_fails(c2_world) -> None:
-    from cramlite.designators.failures import NavigationFailed
-    from cramlite.designators.process_modules import SimulatedProcessModules
-
-    class FirstDriveRefused(SimulatedProcessModules):
-        def __init__(self, world):
-            super().__init__(world)
-            self.refused = 0
-
-        def execute_base_trajectory(self, trajectory, on_state=None):
-            if self.refused == 0:
-                self.refused += 1
-                raise NavigationFailed("a person is standing there (injected)")
-            super().execute_base_trajectory(trajectory, on_state)
-
     world = c2_world
     with simulated_robot(world, seed=1) as ctx:
         ParkArmsAction().perform(ctx)
-        ctx.modules = FirstDriveRefused(world)
+        ctx.modules = NavigationFailsOnce(world)
         OpenAction("drawer_2").perform(ctx)
         assert ctx.modules.refused == 1
         assert world.world_joint_positions()["drawer_2_joint"] == pytest.approx(0.35)
