@@ -10,6 +10,7 @@ import argparse
 import math
 import sys
 from collections.abc import Callable
+from pathlib import Path
 
 from cramlite.errors import UserInputError
 
@@ -141,8 +142,6 @@ non_negative_int = int_at_least(0, "a whole number >= 0")
 def writable_file(text: str, option: str) -> None:
     """Refuse, before any work, a file that could not be written at the end: a folder, a
     path under a file, a read-only place (its folders are made)."""
-    from pathlib import Path
-
     target = Path(text)
     if target.is_dir():
         raise UserInputError("is a folder; expected the name of a file to write",
@@ -163,11 +162,9 @@ def writable_file(text: str, option: str) -> None:
         target.unlink()  # (only probed: the command writes it when it is done)
 
 
-def writable_folder(text: str, option: str = "--out"):
+def writable_folder(text: str, option: str = "--out") -> Path:
     """A folder to write into, made now (with its parents): refuses a file, a path under
     a file, a read-only place."""
-    from pathlib import Path
-
     path = Path(text)
     if path.exists() and not path.is_dir():
         raise UserInputError("expected a folder (or a new path), got an existing file",

@@ -7,7 +7,6 @@ import contextlib
 import os
 import sys
 from collections.abc import Iterator
-from pathlib import Path
 
 from cramlite.cli.common import (
     EXIT_OK,
@@ -32,12 +31,6 @@ def quiet_broken_pipe() -> Iterator[None]:
     except BrokenPipeError:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())  # the interpreter's last flush goes nowhere
-
-
-def out_folder(text: str, option: str = "--out") -> Path:
-    """A folder to write into (made now): refuses a file, a path under a file, a
-    read-only place, before any work is done."""
-    return writable_folder(text, option)
 
 
 def _load_episodes(args: argparse.Namespace):
@@ -125,7 +118,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
             raise UserInputError(f"unknown projection {d!r}; expected a comma-separated list "
                                  f"of {', '.join(DIM_NAMES)}", field="--dims")
     strategy_checked(args.strategy, form=args.form)
-    out = out_folder(args.out)
+    out = writable_folder(args.out)
     episodes, _ = _load_episodes(args)
     configs = source_grid(independent_mid=args.independent_mid)
     try:

@@ -13,8 +13,9 @@ from cramlite.cli.common import (
     progress_bar,
     strategy_checked,
     writable_file,
+    writable_folder,
 )
-from cramlite.cli.evaluation import add_protocol_argument, out_folder, quiet_broken_pipe
+from cramlite.cli.evaluation import add_protocol_argument, quiet_broken_pipe
 from cramlite.errors import UserInputError
 from cramlite.evaluation.options import METRICS
 from cramlite.strategies.base import StrategyError
@@ -73,7 +74,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
                              "to compare", field="--strategies")
     for name in strategies:
         strategy_checked(name)
-    out = out_folder(args.out) if args.out else None
+    out = writable_folder(args.out) if args.out else None
     data = _data_path(args.data)
     episodes, _ = load_episodes(data)
     with progress_bar(len(episodes) * len(strategies), "compare") as bar:
