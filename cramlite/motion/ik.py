@@ -87,17 +87,14 @@ class ArmIK:
         self._continuous = [self.model.nqs[i] == 2 for i in range(1, self.model.njoints)]
         self._idx_q = [int(self.model.idx_qs[i]) for i in range(1, self.model.njoints)]
         lower, upper = self.model.lowerPositionLimit, self.model.upperPositionLimit
-        self._bounded = [(i, lower[i], upper[i]) for i, cont in zip(self._idx_q, self._continuous,
-                                                                       strict=True) if not cont]
+        #: (q index, v index, lower, upper) of the joints with limits
+        self._bounded_v = [(i, int(self.model.idx_vs[j]), lower[i], upper[i])
+                           for j, i, cont in zip(range(1, self.model.njoints), self._idx_q,
+                                                 self._continuous, strict=True) if not cont]
+        self._bounded = [(i, lo, hi) for i, _, lo, hi in self._bounded_v]
         torso_q = (int(self.model.idx_qs[self.model.getJointId(TORSO_JOINT)])
                    if TORSO_JOINT in self.joint_names else -1)
         self._arm_bounded = [b for b in self._bounded if b[0] != torso_q]
-        #: (q index, v index, lower, upper) of the joints with limits
-        self._bounded_v = [(int(model_iq), int(self.model.idx_vs[j]), lower[model_iq],
-                            upper[model_iq])
-                           for j, model_iq, cont in zip(range(1, self.model.njoints),
-                                                        self._idx_q, self._continuous,
-                                                        strict=True) if not cont]
         self._torso = None
         if TORSO_JOINT in self.joint_names:
             jid = self.model.getJointId(TORSO_JOINT)
