@@ -68,8 +68,7 @@ class BaseMotionPlanner:
         goal = (goal[0], goal[1], wrap_angle(goal[2]))
         if not (self.checker.is_free(*start) and self.checker.is_free(*goal)):
             return None
-        straight = self._interpolate([start, goal])
-        if all(self.checker.is_free(*p) for p in straight):
+        if (straight := self._free_waypoints([start, goal])) is not None:
             return BasePath(straight)
         seed = int(rng.integers(1, 2**31 - 1))
         # OMPL checks its motions coarsely first; every executed waypoint is checked. If one
@@ -80,20 +79,22 @@ class BaseMotionPlanner:
         coarse = self._ompl(start, goal, seed, coarse_resolution)
         if coarse is None:
             return None
-        if self._free(coarse):
-            return BasePath(self._interpolate(coarse))
+        if (waypoints := self._free_waypoints(coarse)) is not None:
+            return BasePath(waypoints)
         if coarse_resolution != fine_resolution:
             repaired = self._repair(coarse, seed, fine_resolution)
-            if repaired is not None and self._free(repaired):
-                return BasePath(self._interpolate(repaired))
+            if repaired is not None and \
+                    (waypoints := self._free_waypoints(repaired)) is not None:
+                return BasePath(waypoints)
             fine = self._ompl(start, goal, seed, fine_resolution)
-            if fine is not None and self._free(fine):
-                return BasePath(self._interpolate(fine))
+            if fine is not None and (waypoints := self._free_waypoints(fine)) is not None:
+                return BasePath(waypoints)
         return None
 
-    def _free(self, vertices: Sequence[BasePose]) -> bool:
-        """Is every waypoint along these vertices free?"""
-        return all(self.checker.is_free(*p) for p in self._interpolate(vertices))
+    def _free_waypoints(self, vertices: Sequence[BasePose]) -> list[BasePose] | None:
+        """The waypoints along these vertices, if every one is free."""
+        waypoints = self._interpolate(vertices)
+        return waypoints if all(self.checker.is_free(*p) for p in waypoints) else None
 
     def _repair(self, vertices: Sequence[BasePose], seed: int,
                 resolution: float) -> list[BasePose] | None:
@@ -101,7 +102,7 @@ class BaseMotionPlanner:
         free ends); None if one of them has no path."""
         out = [tuple(vertices[0])]
         for a, b in itertools.pairwise(vertices):
-            if self._free([a, b]):
+            if self._free_waypoints([a, b]) is not None:
                 out.append(tuple(b))
                 continue
             detour = self._ompl(a, b, seed, resolution)
