@@ -101,7 +101,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         help="play it in the PyBullet window (needs a display)")
     replay.add_argument("--check", action="store_true",
                         help="re-check every state and the motion between them: no robot "
-                             "link or held object inside the kitchen or another item")
+                             "link, held object or standing item inside the kitchen or "
+                             "another item")
     replay.add_argument("--tolerance-cm", type=positive_float, default=1.0,
                         help="penetration allowed by --check (default 1 cm: convex hulls)")
     replay.set_defaults(func=cmd_replay)
