@@ -19,6 +19,7 @@ from cramlite.designators import ExecutionOptions, RobotContext, SimulatedProces
 from cramlite.designators.tasks import time_in
 from cramlite.errors import SetupError
 from cramlite.plan_names import PLAN_NAMES  # noqa: F401  (re-exported)
+from cramlite.plans import PLANS
 from cramlite.strategies import make_strategy
 from cramlite.world.bodies import yaw_quat
 from cramlite.world.setup import Setup, load_setup, resolve_setup_path
@@ -83,8 +84,6 @@ class TrialRunner:
             order: list[str] | None = None, trace: str | Path | None = None) -> TrialResult:
         """One trial; `order` replaces the setup's baseline order (for `baseline`);
         `trace`: write every executed state to this file (format cramlite-trace/1)."""
-        from cramlite.plans import PLANS
-
         if plan not in PLANS:
             raise ValueError(f"unknown plan {plan!r}; expected one of {', '.join(PLANS)}")
         self.modules.release_all()

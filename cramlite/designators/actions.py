@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from scipy.spatial import ConvexHull, QhullError
 
 from cramlite.designators.context import Holding, RobotContext, carried_map
 from cramlite.designators.failures import (
@@ -464,8 +465,6 @@ def _at(ctx: RobotContext, container, local: Vec3) -> Vec3:
 def footprint_outline(points_xy: np.ndarray, spacing: float) -> np.ndarray:
     """Points every `spacing` along the convex hull of 2D points (a carried object's or a
     link's footprint as seen from above)."""
-    from scipy.spatial import ConvexHull, QhullError
-
     pts = np.asarray(points_xy, dtype=float).reshape(-1, 2)
     try:
         hull = pts[ConvexHull(pts).vertices]

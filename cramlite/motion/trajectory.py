@@ -22,6 +22,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
 
 #: Largest change of a revolute joint between consecutive states (radians).
 MAX_JOINT_STEP_RAD = 0.05
@@ -126,8 +127,6 @@ def densify(vertices: np.ndarray, max_steps: np.ndarray) -> tuple[np.ndarray, li
 def segment_profile(start: np.ndarray, goal: np.ndarray, velocity: np.ndarray,
                     acceleration: np.ndarray):
     """A rest-to-rest, phase-synchronised Ruckig trajectory from start to goal."""
-    from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
-
     n = len(start)
     otg = Ruckig(n)
     inp = InputParameter(n)
