@@ -39,6 +39,38 @@ def test_ik_refuses_unreachable_targets() -> None:
     assert ik.solve(high, rng) is None
 
 
+@pytest.mark.parametrize("arm", ["right", "left"])
+def test_reach_test_never_refuses_a_reachable_target(arm: str) -> None:
+    """The quick refusal (fingers and wrist against the shoulder's reach) says "out of
+    reach" only where no descent would help: never for a pose the arm can take, at its own
+    torso height or with the torso free."""
+    ik = arm_ik(arm)
+    rng = np.random.default_rng(7)
+    torso = ik._torso[0]
+    for _ in range(3000):
+        q = ik.random_q(rng)
+        target = ik.forward(ik.from_q(q))
+        assert not ik.out_of_reach(target, fixed_torso_m=float(q[torso]))
+        assert not ik.out_of_reach(target)
+
+
+def test_reach_test_refuses_a_gripper_facing_back_at_the_shoulder() -> None:
+    """Fingers within reach, pointing back at the robot: the wrist would be 18 cm farther
+    out than the fingers, beyond the arm; refused without a descent, and rightly."""
+    ik = arm_ik("right")
+    facing_back = pin.utils.rpyToMatrix(0.0, 0.0, math.pi)
+    target = pin.SE3(facing_back, ik._shoulder + np.array([0.72, 0.0, 0.1]))
+    assert np.linalg.norm(target.translation - ik._shoulder - [0, 0, 0.1]) < ik._reach
+    assert ik.out_of_reach(target, fixed_torso_m=0.1)
+    original = ik.out_of_reach
+    try:  # and a descent from many starts finds nothing either
+        ik.out_of_reach = lambda *args, **kwargs: False
+        assert ik.solve(target, np.random.default_rng(0), fixed_torso_m=0.1,
+                        restarts=20) is None
+    finally:
+        del ik.out_of_reach
+    assert ik.out_of_reach == original
+
 def test_ik_model_is_built_once_per_arm() -> None:
     assert arm_ik("right") is arm_ik("right")
     assert arm_ik("right").model.nq == 10  # torso + 7 arm joints, two continuous (cos, sin)

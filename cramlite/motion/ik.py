@@ -99,28 +99,44 @@ class ArmIK:
         if TORSO_JOINT in self.joint_names:
             jid = self.model.getJointId(TORSO_JOINT)
             self._torso = (int(self.model.idx_qs[jid]), int(self.model.idx_vs[jid]))
-        self._shoulder, self._reach = self._shoulder_and_reach()
+        self._shoulder, self._reach, self._wrist, self._wrist_reach = self._reach_bounds()
 
-    def _shoulder_and_reach(self) -> tuple[np.ndarray, float]:
-        """The shoulder's position (torso at 0) and the farthest the tool frame gets from
-        it (the arm stretched out; sampled configurations too, plus 2 cm): a target
-        farther away has no solution, and saying so takes no descent."""
+    def _reach_bounds(self) -> tuple[np.ndarray, float, np.ndarray, float]:
+        """The shoulder's position (torso at 0); the farthest the tool frame gets from it
+        (the arm stretched out; sampled configurations too, plus 2 cm); the wrist's centre
+        in the tool frame (where the wrist's joints meet: fixed behind the fingers); and the
+        farthest the wrist gets from the shoulder (likewise). A target that puts either out
+        of range has no solution, and saying so takes no descent: a handle facing away from
+        the shoulder is near enough for the fingers, not for the wrist."""
         model, data = self.model, self.data
         shoulder = model.getJointId(f"{arm_prefix(self.arm)}_shoulder_pan_joint")
+        wrist = model.getJointId(f"{arm_prefix(self.arm)}_wrist_flex_joint")
         rng = np.random.default_rng(0)
-        reach = 0.0
+        reach = wrist_reach = 0.0
         for q in [pin.neutral(model), *(self.random_q(rng) for _ in range(500))]:
             if self._torso is not None:
                 q[self._torso[0]] = 0.0
-            pin.framesForwardKinematics(model, data, q)
-            reach = max(reach, float(np.linalg.norm(data.oMf[self.frame_id].translation
-                                                    - data.oMi[shoulder].translation)))
-        return data.oMi[shoulder].translation.copy(), reach + 0.02
+            pin.forwardKinematics(model, data, q)
+            origin = data.oMi[shoulder].translation
+            tool = pin.updateFramePlacement(model, data, self.frame_id)
+            reach = max(reach, float(np.linalg.norm(tool.translation - origin)))
+            wrist_reach = max(wrist_reach, float(np.linalg.norm(data.oMi[wrist].translation
+                                                                - origin)))
+        in_tool = data.oMf[self.frame_id].actInv(data.oMi[wrist]).translation.copy()
+        return data.oMi[shoulder].translation.copy(), reach + 0.02, in_tool, wrist_reach + 0.02
 
     def out_of_reach(self, target: pin.SE3, fixed_torso_m: float | None = None) -> bool:
-        """Is the target surely too far from the shoulder, at the given torso height (or
-        any height the torso can take)?"""
-        x, y, z = np.asarray(target.translation) - self._shoulder
+        """Is the target surely out of reach of the fingers or of the wrist, at the given
+        torso height (or at any height the torso can take)?"""
+        fingers = np.asarray(target.translation)
+        wrist = fingers + np.asarray(target.rotation) @ self._wrist
+        return (self._distance(fingers, fixed_torso_m) > self._reach or
+                self._distance(wrist, fixed_torso_m) > self._wrist_reach)
+
+    def _distance(self, point: np.ndarray, fixed_torso_m: float | None) -> float:
+        """From the shoulder to a point, the torso at the given height (or at the height
+        that brings the shoulder closest)."""
+        x, y, z = point - self._shoulder
         if self._torso is None:
             dz = z
         elif fixed_torso_m is not None:
@@ -129,7 +145,7 @@ class ArmIK:
             lo = self.model.lowerPositionLimit[self._torso[0]]
             hi = self.model.upperPositionLimit[self._torso[0]]
             dz = z - min(max(z, lo), hi)
-        return math.sqrt(x * x + y * y + dz * dz) > self._reach
+        return math.sqrt(x * x + y * y + dz * dz)
 
     # -- conversions -------------------------------------------------------------------
     def to_q(self, joints: dict[str, float]) -> np.ndarray:
@@ -168,11 +184,14 @@ class ArmIK:
               seed_joints: dict[str, float] | None = None,
               preferred_torso_m: float | None = None,
               fixed_torso_m: float | None = None,
-              restarts: int | None = None) -> IKSolution | None:
+              restarts: int | None = None,
+              near_limits_ok: bool = False) -> IKSolution | None:
         """Joint angles that put the tool frame at `target` (base frame), or None.
 
         `fixed_torso_m`: keep the torso at this height (the PR2's torso moves at 1.3 cm/s,
-        so a solution that keeps it saves seconds of robot time)."""
+        so a solution that keeps it saves seconds of robot time). `near_limits_ok`: the
+        first solution found is enough, even one close to a joint limit (to learn whether a
+        target can be reached at all, not how best)."""
         opts = self.options
         if self.out_of_reach(target, fixed_torso_m):
             return None
@@ -194,7 +213,7 @@ class ArmIK:
                                    fixed_torso=torso is not None)
             if result is None:
                 continue
-            if self._clear_of_limits(result.joints):
+            if near_limits_ok or self._clear_of_limits(result.joints):
                 return result
             fallback = fallback or result
         return fallback
@@ -210,12 +229,16 @@ class ArmIK:
         opts, model, data, fid = self.options, self.model, self.data, self.frame_id
         best, best_at = np.inf, 0
         for it in range(opts.max_iterations):
-            pin.framesForwardKinematics(model, data, q)
-            error_transform = data.oMf[fid].actInv(target)
+            # (the tool frame alone: the reduced model has 164 frames, framesForwardKinematics
+            # would place them all)
+            pin.forwardKinematics(model, data, q)
+            error_transform = pin.updateFramePlacement(model, data, fid).actInv(target)
             err = pin.log6(error_transform).vector
-            pos_err, rot_err = np.linalg.norm(err[:3]), np.linalg.norm(err[3:])
+            ex, ey, ez, rx, ry, rz = err.tolist()
+            pos_err = math.sqrt(ex * ex + ey * ey + ez * ez)
+            rot_err = math.sqrt(rx * rx + ry * ry + rz * rz)
             if pos_err < opts.position_tolerance_m and rot_err < opts.rotation_tolerance_rad:
-                return IKSolution(self.from_q(q), float(pos_err), float(rot_err), it)
+                return IKSolution(self.from_q(q), pos_err, rot_err, it)
             total = pos_err + rot_err
             if total < 0.5 * best:
                 best, best_at = total, it
