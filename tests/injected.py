@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from cramlite.designators import NavigationFailed, SimulatedProcessModules
+from cramlite.designators.failures import ContainerManipulationFailed
 
 
 class NavigationFailsOnce(SimulatedProcessModules):
@@ -17,3 +18,18 @@ class NavigationFailsOnce(SimulatedProcessModules):
             self.refused += 1
             raise NavigationFailed("path blocked by a person (injected)")
         super().execute_base_trajectory(trajectory, on_state)
+
+
+class HandlesNeedBothHandsFree(SimulatedProcessModules):
+    """Injected failure: a drawer or door does not move while a hand holds something (say,
+    its handle is too stiff to pull with one arm while the other carries an item)."""
+
+    def __init__(self, world):
+        super().__init__(world)
+        self.refused = 0
+
+    def execute_joint_trajectory(self, trajectory, on_state=None):
+        if trajectory.world and self._attached:  # the arm follows a handle, a hand is full
+            self.refused += 1
+            raise ContainerManipulationFailed("the handle does not move (injected)")
+        super().execute_joint_trajectory(trajectory, on_state)

@@ -19,7 +19,7 @@ from cramlite.trial import TrialRunner
 from cramlite.world import World, load_setup
 from cramlite.world.bullet import p
 from tests.conftest import run_cli
-from tests.injected import NavigationFailsOnce
+from tests.injected import HandlesNeedBothHandsFree, NavigationFailsOnce
 
 
 @pytest.fixture(scope="module")
@@ -225,18 +225,22 @@ def test_an_open_door_is_drawn_on_the_map_by_its_outline_not_its_bounds() -> Non
 
 
 def test_a_container_the_free_hand_cannot_open_is_opened_with_both_hands_free() -> None:
-    """Putting the spoon back into the cupboard, the left hand holds it and the right one
-    cannot reach the door's handle: the spoon is put down, the cupboard opened, and the
-    spoon fetched again."""
+    """Putting the spoon back into the cupboard (and the cup into its drawer), the handles
+    do not move while a hand is full (injected at execution, after the hand has closed on
+    the handle): the gripper lets go and backs off, the item is put down, the container
+    opened with both hands free, and the item fetched again and put in."""
     setup = Path(__file__).parent / "one_hand_cupboard.yaml"
-    result = run_cli("run", str(setup), "--plan", "clear-table", "--strategy", "opm",
-                     "--json")
-    data = json.loads(result.stdout)
-    assert result.returncode == 0 and data["success"], data["failures"]
-    spoon = next(n for n in data["actions"]
-                 if n["name"] == "TransportAction" and n["object"] == "spoon")
-    steps = [(c["name"], c["status"]) for c in spoon["children"]]
-    failed = steps.index(("OpenAction", "failed"))
-    assert steps[failed + 1:].index(("OpenAction", "succeeded")) < \
-        steps[failed + 1:].index(("PickUpAction", "succeeded"))
-    assert steps[-1] == ("CloseAction", "succeeded")
+    with TrialRunner(str(setup)) as runner:
+        runner.modules = HandlesNeedBothHandsFree(runner.world)
+        result = runner.run("opm", plan="clear-table")
+        assert runner.modules.refused > 0
+    assert result.success, result.failures
+    for item in ("spoon", "cup"):
+        node = next(n for n in result.actions
+                    if n["name"] == "TransportAction" and n["object"] == item)
+        steps = [(c["name"], c["status"]) for c in node["children"]]
+        failed = steps.index(("OpenAction", "failed"))
+        after = steps[failed + 1:]
+        assert after.index(("PlaceAction", "succeeded")) < \
+            after.index(("OpenAction", "succeeded")) < after.index(("PickUpAction", "succeeded"))
+        assert steps[-1] == ("CloseAction", "succeeded")

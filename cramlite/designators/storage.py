@@ -15,6 +15,7 @@ fall through to the next base pose or arm.
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import zlib
 from collections.abc import Iterator, Sequence
@@ -64,6 +65,11 @@ class HandlePath:
     values: np.ndarray
     poses: list[pin.SE3]
     arc_m: np.ndarray
+
+    @functools.cached_property
+    def key(self) -> tuple:
+        """The poses, rounded: what the IK along the handle depends on (a dictionary key)."""
+        return tuple(tuple(np.round(pose.homogeneous[:3].ravel(), 5)) for pose in self.poses)
 
 
 def handle_path(ctx: RobotContext, container: Container, start: float, end: float,
@@ -196,8 +202,7 @@ class AccessingLocation:
         if key not in cache:
             # (also kept for the process, by the handle's poses themselves: another world
             # of the same kitchen, e.g. the next setup a bench worker loads, reuses it)
-            shared = (key, tuple(tuple(np.round(pose.homogeneous[:3].ravel(), 5))
-                                 for pose in path.poses))
+            shared = (key, path.key)
             chain = _HANDLE_IK.get(shared, _UNSOLVED)
             if chain is _UNSOLVED:  # (threads of one worker may both solve it: same answer)
                 rng = np.random.default_rng([zlib.crc32(repr(key).encode())])
@@ -227,11 +232,14 @@ class AccessingLocation:
         stages.append((post, self.end, "open"))
         with ctx.collisions.preserved([*world.objects]):
             robot.set_base_pose(*base)
+            scene, fingers = ctx.collisions.scene(names, others, ignore=touch), None
             try:
                 for joints, value, gripper in stages:
-                    robot.set_joint_positions(gripper_joints(arm, gripper))
+                    if gripper != fingers:
+                        robot.set_joint_positions(gripper_joints(arm, gripper))
+                        fingers = gripper
                     world.set_world_joint(container.joint, value, exclude)  # items ride along
-                    scene = ctx.collisions.scene(names, others, ignore=touch)
+                    scene.refresh_obstacles()
                     if not scene.is_free(np.array([joints[n] for n in names])):
                         return False
             finally:
@@ -254,14 +262,20 @@ def _handle_ik(arm: str, base: BasePose, torso: float, path: HandlePath,
     tucked, random) whose solution can be followed all the way."""
     ik = arm_ik(arm)
     ends = [in_base_frame(path.poses[0], base), in_base_frame(path.poses[-1], base)]
+    clear = [in_base_frame(backed_off(path.poses[0], HANDLE_CLEARANCE_M), base),
+             in_base_frame(backed_off(path.poses[-1], HANDLE_CLEARANCE_M), base)]
     # both ends first: most base poses fail there, before the whole path is solved
-    if any(ik.solve(end, rng, reaching_seed(arm), fixed_torso_m=torso, restarts=4) is None
-           for end in ends):
+    if any(ik.solve(end, rng, reaching_seed(arm), fixed_torso_m=torso, restarts=4,
+                    near_limits_ok=True) is None for end in ends):
         return None
     for start in (reaching_seed(arm), {**PARK_JOINTS[arm], TORSO_JOINT: torso}, None):
         first = ik.solve(ends[0], rng, start, fixed_torso_m=torso,
                          restarts=0 if start else 2)
         if first is None:
+            continue
+        # the pre-grasp before the path: from here it fails more often than the path does
+        pre = ik.solve(clear[0], rng, first.joints, fixed_torso_m=torso, restarts=1)
+        if pre is None:
             continue
         chain = [first.joints]
         for pose in path.poses[1:]:
@@ -271,12 +285,8 @@ def _handle_ik(arm: str, base: BasePose, torso: float, path: HandlePath,
                 break
             chain.append(solution.joints)
         else:
-            pre = ik.solve(in_base_frame(backed_off(path.poses[0], HANDLE_CLEARANCE_M),
-                                         base), rng, chain[0], fixed_torso_m=torso, restarts=1)
-            post = ik.solve(in_base_frame(backed_off(path.poses[-1], HANDLE_CLEARANCE_M),
-                                          base), rng, chain[-1], fixed_torso_m=torso,
-                            restarts=1)
-            if pre is not None and post is not None:
+            post = ik.solve(clear[1], rng, chain[-1], fixed_torso_m=torso, restarts=1)
+            if post is not None:
                 return chain, pre.joints, post.joints
     return None
 
@@ -396,12 +406,28 @@ def _follow(ctx: RobotContext, container: Container, access: AccessPose) -> None
     NavigateAction(access.base).perform(ctx)
     MoveGripperMotion(access.arm, "open", touch).perform(ctx)
     MoveArmJointsMotion(access.pre_joints, touch).perform(ctx)
-    MoveArmJointsMotion(access.joints_at(0), touch).perform(ctx)
-    MoveGripperMotion(access.arm, "close", touch).perform(ctx)
-    FollowHandleMotion(access, container.joint).perform(ctx)
+    try:
+        MoveArmJointsMotion(access.joints_at(0), touch).perform(ctx)
+        MoveGripperMotion(access.arm, "close", touch).perform(ctx)
+        FollowHandleMotion(access, container.joint).perform(ctx)
+    except PlanFailure:
+        _let_go(ctx, container, access)
+        raise
     MoveGripperMotion(access.arm, "open", touch).perform(ctx)
     MoveArmJointsMotion(access.post_joints, touch).perform(ctx)
     ParkArmsAction(access.arm).perform(ctx)
+
+
+def _let_go(ctx: RobotContext, container: Container, access: AccessPose) -> None:
+    """After a failure at the handle: open the gripper and back off the handle (to the
+    pre-grasp, or the retreat if the container got to the end), so the arm can be parked
+    (from around the handle no path that may not touch it is free)."""
+    touch = (container.handle,)
+    value = ctx.modules.world_joint_positions()[container.joint]
+    back = access.post_joints if abs(value - access.values[-1]) < 1e-3 else access.pre_joints
+    with contextlib.suppress(PlanFailure):
+        MoveGripperMotion(access.arm, "open", touch).perform(ctx)
+        MoveArmJointsMotion(back, touch).perform(ctx)
 
 
 @dataclass

@@ -239,23 +239,28 @@ class CollisionScene:
         self._radii_sq = (np.array(radii, dtype=float) ** 2)[:, None]
         self._radius_max = max(radii, default=0.0)
         held_names = {h.name for h in held}
+        self.world = world
         # obstacles: every environment link with a shape, every item not held or ignored
         obstacles: list[tuple[int, int, str]] = []
-        boxes = []
-        for name, index, lo, hi in world.environment_link_boxes():
-            if name in ignore:
-                continue
-            obstacles.append((world.environment, index, name))
-            boxes.append((lo, hi))
-        for name, obj in world.objects.items():
-            if name in held_names or name in ignore:
-                continue
-            obstacles.append((obj.body, -1, repr(name)))
-            boxes.append(obj.aabb())
+        for name, index, _, _ in world.environment_link_boxes():
+            if name not in ignore:
+                obstacles.append((world.environment, index, name))
+        self._items = [name for name in world.objects
+                       if name not in held_names and name not in ignore]
+        obstacles += [(world.objects[name].body, -1, repr(name)) for name in self._items]
         self.obstacles = obstacles
+        self._ignore = ignore
+        self.refresh_obstacles()
+        self.checks = 0
+
+    def refresh_obstacles(self) -> None:
+        """Measure the obstacles' boxes again (a drawer or door moved, and what rides in
+        it), keeping everything else about the scene."""
+        boxes = [(lo, hi) for name, _, lo, hi in self.world.environment_link_boxes()
+                 if name not in self._ignore]
+        boxes += [self.world.objects[name].aabb() for name in self._items]
         arr = np.array(boxes, dtype=float).reshape(-1, 2, 3)
         self._lo, self._hi = arr[:, 0, :], arr[:, 1, :]
-        self.checks = 0
 
     def set_state(self, q: Sequence[float]) -> None:
         """Put the robot's moving joints at q (held objects follow in `_place_held`)."""
