@@ -25,6 +25,7 @@ from cramlite.designators import (
 from cramlite.designators.actions import update_carried
 from cramlite.designators.context import Holding, carried_map
 from cramlite.motion.arm_planner import ArmMotionPlanner
+from cramlite.motion.collision import HeldObject
 from cramlite.motion.trajectory import densify
 from cramlite.trace import read_trace
 from cramlite.trace.replay import penetrations
@@ -279,3 +280,33 @@ def test_the_base_check_counts_the_parked_arms_as_they_are_now() -> None:
         torso = ctx.modules.joint_positions(["torso_lift_joint"])["torso_lift_joint"]
         assert torso == pytest.approx(0.25, abs=1e-9)  # the check put everything back
         assert ctx.base_checker().is_free(0.25, 0.9, -0.4359)  # away from the door: clear
+
+
+def test_the_broadphase_of_one_state_misses_no_penetration() -> None:
+    """A state's broadphase (spheres about the links' centres of mass, and about a held
+    item) passes on every part-obstacle pair the exact check finds penetrating: checked
+    against every pair, for arm states drawn at random beside the open cupboard, holding
+    the cup."""
+    with World.from_setup(load_setup("c1")) as world, simulated_robot(world) as ctx:
+        ParkArmsAction().perform(ctx)
+        world.set_world_joint("cupboard_door_joint", 1.2)
+        world.robot.set_base_pose(0.45, 1.45, 0.2)
+        names = ["torso_lift_joint", *RIGHT_ARM]
+        held = [HeldObject("cup", "r_gripper_tool_frame", ((0.12, 0.0, -0.06), (0, 0, 0, 1)))]
+        scene = ctx.collisions.scene(names, held)
+        rng = np.random.default_rng(3)
+        turning = ctx.limits.continuous
+        lower = np.array([-math.pi if n in turning else ctx.limits.lower[n] for n in names])
+        upper = np.array([math.pi if n in turning else ctx.limits.upper[n] for n in names])
+        penetrating = 0
+        for _ in range(400):
+            q = rng.uniform(lower, upper)
+            scene.set_state(q)
+            scene._place_held()
+            passed = {tuple(pair) for pair in scene._pairs().tolist()}
+            for part in range(len(scene.parts)):
+                for k in range(len(scene.obstacles)):
+                    if scene._depth(part, k) > scene.tolerance_m:
+                        penetrating += 1
+                        assert (part, k) in passed, (scene.parts[part], scene.obstacles[k])
+        assert penetrating > 100  # the draw reaches into the furniture often

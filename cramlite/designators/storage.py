@@ -239,7 +239,7 @@ class AccessingLocation:
                         robot.set_joint_positions(gripper_joints(arm, gripper))
                         fingers = gripper
                     world.set_world_joint(container.joint, value, exclude)  # items ride along
-                    scene.refresh_obstacles()
+                    scene.refresh_obstacles(container.joint)
                     if not scene.is_free(np.array([joints[n] for n in names])):
                         return False
             finally:

@@ -73,8 +73,9 @@ class CollisionChecker:
         self._has_shape = {j for j in range(count)
                            if p.getCollisionShapeData(body, j, physicsClientId=client)}
         self._moving_links_cache: dict[frozenset[str], list[int]] = {}
-        self.spheres = self._link_spheres()
+        self.spheres, self.mass_spheres = self._link_spheres()
         self._link_frames: LinkFrames | None = None
+        self._mass_centres: dict[int, np.ndarray] = {}
 
     def link_frames(self) -> LinkFrames:
         """The robot's link frames by Pinocchio (for the broadphase of whole motions)."""
@@ -82,10 +83,13 @@ class CollisionChecker:
             self._link_frames = LinkFrames(self.robot, self.client)
         return self._link_frames
 
-    def _link_spheres(self) -> dict[int, tuple[np.ndarray, float]]:
-        """Link -> (centre in the link frame, radius) of a sphere that holds its shape."""
+    def _link_spheres(self) -> tuple[dict[int, tuple[np.ndarray, float]], dict[int, float]]:
+        """Link -> (centre in the link frame, radius) of a sphere that holds its shape; and
+        link -> radius of a sphere about the link's centre of mass that holds it (PyBullet
+        reports that centre's position in the world with the link's state: a state's
+        broadphase needs no rotation)."""
         robot, client = self.robot, self.client
-        out = {}
+        out, about_mass = {}, {}
         with self.preserved():
             robot.set_base_pose(0.0, 0.0, 0.0)
             robot.set_joint_positions(dict.fromkeys(robot.joint_index, 0.0))
@@ -99,7 +103,16 @@ class CollisionChecker:
                 local = (corners - np.asarray(state[4])) @ rotation
                 centre = local.mean(axis=0)
                 out[link] = (centre, float(np.linalg.norm(local - centre, axis=1).max()))
-        return out
+                mass = np.asarray(state[2])  # the centre of mass in the link frame
+                about_mass[link] = float(np.linalg.norm(local - mass, axis=1).max())
+        return out, about_mass
+
+    def mass_centre(self, link: int) -> np.ndarray:
+        """A link's centre of mass in its own frame."""
+        if link not in self._mass_centres:
+            self._mass_centres[link] = np.asarray(p.getLinkState(
+                self.robot.body, link, physicsClientId=self.client)[2])
+        return self._mass_centres[link]
 
     def upper_body_parts(self) -> dict[str, tuple[list[str], list[int]]]:
         """The robot's links above its base with a collision mesh, in three parts (each
@@ -220,47 +233,60 @@ class CollisionScene:
         self.query_links = list(dict.fromkeys([*links, *(link for _, link, _, _ in self.held)]))
         row = {link: i for i, link in enumerate(self.query_links)}
         # parts: (row of its link in the link-state query, sphere centre, radius, body, link)
-        rows, centres, radii, self.parts = [], [], [], []
+        rows, centres, radii, about_mass, self.parts = [], [], [], [], []
         for link in links:
             centre, radius = checker.spheres[link]
             rows.append(row[link])
             centres.append(centre)
             radii.append(radius)
+            about_mass.append(checker.mass_spheres[link])
             self.parts.append((checker.link_names[link], self.body, link))
         for body, link, h, _ in self.held:
             ex, ey, ez = world.objects[h.name].extents
             rel = np.array(p.getMatrixFromQuaternion(h.relative[1])).reshape(3, 3)
             rows.append(row[link])
-            centres.append(np.asarray(h.relative[0]) + rel @ np.array([0.0, 0.0, ez / 2]))
+            centre = np.asarray(h.relative[0]) + rel @ np.array([0.0, 0.0, ez / 2])
+            centres.append(centre)
             radii.append(0.5 * float(np.linalg.norm([ex, ey, ez])))
+            about_mass.append(radii[-1] + float(np.linalg.norm(centre
+                                                               - checker.mass_centre(link))))
             self.parts.append((repr(h.name), body, -1))
         self._rows = np.array(rows, dtype=int)
+        self._row_list = [int(r) for r in rows]
         self._centres = np.array(centres, dtype=float).reshape(-1, 3)
         self._radii_sq = (np.array(radii, dtype=float) ** 2)[:, None]
         self._radius_max = max(radii, default=0.0)
+        self._mass_radii_sq = np.array(about_mass, dtype=float) ** 2
+        self._mass_radius_max = max(about_mass, default=0.0)
         held_names = {h.name for h in held}
         self.world = world
         # obstacles: every environment link with a shape, every item not held or ignored
         obstacles: list[tuple[int, int, str]] = []
-        for name, index, _, _ in world.environment_link_boxes():
+        boxes = []
+        for name, index, lo, hi in world.environment_link_boxes():
             if name not in ignore:
                 obstacles.append((world.environment, index, name))
-        self._items = [name for name in world.objects
-                       if name not in held_names and name not in ignore]
-        obstacles += [(world.objects[name].body, -1, repr(name)) for name in self._items]
+                boxes.append((lo, hi))
+        for name, obj in world.objects.items():
+            if name not in held_names and name not in ignore:
+                obstacles.append((obj.body, -1, repr(name)))
+                boxes.append(obj.aabb())
         self.obstacles = obstacles
-        self._ignore = ignore
-        self.refresh_obstacles()
+        arr = np.array(boxes, dtype=float).reshape(-1, 2, 3)
+        self._lo, self._hi = arr[:, 0, :].copy(), arr[:, 1, :].copy()
         self.checks = 0
 
-    def refresh_obstacles(self) -> None:
-        """Measure the obstacles' boxes again (a drawer or door moved, and what rides in
-        it), keeping everything else about the scene."""
-        boxes = [(lo, hi) for name, _, lo, hi in self.world.environment_link_boxes()
-                 if name not in self._ignore]
-        boxes += [self.world.objects[name].aabb() for name in self._items]
-        arr = np.array(boxes, dtype=float).reshape(-1, 2, 3)
-        self._lo, self._hi = arr[:, 0, :], arr[:, 1, :]
+    def refresh_obstacles(self, joint: str) -> None:
+        """Measure again the boxes of what a drawer's or door's joint moves (its links)
+        and of the items (those inside ride along), keeping everything else."""
+        world, moved = self.world, self.world.links_moved_by(joint)
+        for row, (body, index, _) in enumerate(self.obstacles):
+            if body == world.environment:
+                if index in moved:
+                    self._lo[row], self._hi[row] = world.link_bounds(index)
+            else:
+                self._lo[row], self._hi[row] = p.getAABB(body, -1,
+                                                         physicsClientId=self.client)
 
     def set_state(self, q: Sequence[float]) -> None:
         """Put the robot's moving joints at q (held objects follow in `_place_held`)."""
@@ -304,11 +330,26 @@ class CollisionScene:
         return near.reshape(s, len(self._rows), len(self._lo))
 
     def _pairs(self) -> np.ndarray:
-        """(part, obstacle) index pairs whose sphere and box overlap (the broadphase)."""
+        """(part, obstacle) index pairs whose sphere about the part's link's centre of
+        mass overlaps the obstacle's box: the broadphase of one state (no rotation, few
+        numpy calls; the spheres are a little larger than `_overlaps`', and the exact
+        check of a pair costs less than the calls saved)."""
         if not len(self._rows):
             return np.zeros((0, 2), dtype=int)
-        pos, orn = self._link_frames()
-        return np.argwhere(self._overlaps(np.array([pos]), np.array([orn]))[0])
+        states = p.getLinkStates(self.body, self.query_links, computeForwardKinematics=True,
+                                 physicsClientId=self.client)
+        centres = np.array([states[r][0] for r in self._row_list])
+        reach = self._mass_radius_max
+        low, high = centres.min(axis=0) - reach, centres.max(axis=0) + reach
+        close = np.flatnonzero(np.all((self._lo <= high) & (self._hi >= low), axis=1))
+        if not len(close):
+            return np.zeros((0, 2), dtype=int)
+        c = centres[:, None, :]
+        gap = np.maximum(np.maximum(self._lo[close] - c, c - self._hi[close]), 0.0)
+        near = np.einsum("pok,pok->po", gap, gap) < self._mass_radii_sq[:, None]
+        pairs = np.argwhere(near)
+        pairs[:, 1] = close[pairs[:, 1]]
+        return pairs
 
     def states_free(self, states: np.ndarray, order: Sequence[int] | None = None) -> bool:
         """Every state (rows of joint vectors) free: one broadphase for all of them, then

@@ -308,6 +308,25 @@ class World:
         static, moving = self._environment_links_by_motion()
         return static + [(name, index, *self.link_bounds(index)) for name, index in moving]
 
+    def links_moved_by(self, joint: str) -> frozenset[int]:
+        """The environment links (with a shape or not) that a drawer's or door's joint
+        moves: its own link and every link below it."""
+        key = ("links moved by", joint)
+        if key not in self.cache:
+            root = self.world_joints[joint]
+            parents = {j: p.getJointInfo(self.environment, j, physicsClientId=self.client)[16]
+                       for j in range(p.getNumJoints(self.environment,
+                                                     physicsClientId=self.client))}
+            moved = set()
+            for link in parents:
+                j = link
+                while j >= 0 and j != root:
+                    j = parents[j]
+                if j == root:
+                    moved.add(link)
+            self.cache[key] = frozenset(moved)
+        return self.cache[key]
+
     def _environment_links_by_motion(self) -> tuple[list[tuple[str, int, Vec3, Vec3]],
                                                     list[tuple[str, int]]]:
         """The environment links with a shape: those that never move with their bounds
