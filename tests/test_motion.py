@@ -126,3 +126,31 @@ def test_footprint_respects_yaw(planner) -> None:
     # 3 cm from the island's near edge facing it: free; turned 45 degrees the corners hit
     assert checker.is_free(-0.30, 1.4, math.pi)
     assert not checker.is_free(-0.30, 1.4, math.pi * 0.75)
+
+
+def test_footprint_check_agrees_with_every_point_looked_up(planner) -> None:
+    """The base check skips the inside points nearer the base's middle than the clearance
+    allows an obstacle; its answer is that of looking every point of the base up, at poses
+    all over the kitchen and with a small obstacle (a 4 cm stool) that fits under the
+    base."""
+    _, checker = planner
+    world_map = checker.occupancy
+    boxes = [("stool", (0.9, 0.5, 0.0), (0.94, 0.54, 0.45))]
+    floor = [("floor", (world_map.bounds.x_min, world_map.bounds.y_min, -0.01),
+              (world_map.bounds.x_max, world_map.bounds.y_max, 0.0))]
+    rng = np.random.default_rng(4)
+    for occupancy in (world_map, OccupancyMap(floor + boxes)):
+        check = FootprintChecker(occupancy)
+        blocked = 0
+        for _ in range(3000):
+            x = rng.uniform(occupancy.bounds.x_min, occupancy.bounds.x_max)
+            y = rng.uniform(occupancy.bounds.y_min, occupancy.bounds.y_max)
+            if occupancy is not world_map:  # around the stool
+                x, y = rng.uniform(0.5, 1.3), rng.uniform(0.1, 0.9)
+            yaw = rng.uniform(-math.pi, math.pi)
+            c, s = math.cos(yaw), math.sin(yaw)
+            every = occupancy.blocked_at(check.outline @ np.array([[c, s], [-s, c]])
+                                         + (x, y)).any()
+            assert check.is_free(x, y, yaw) == (not every), (x, y, yaw)
+            blocked += every
+        assert 300 < blocked < 2700

@@ -191,9 +191,15 @@ class FootprintChecker:
     def __init__(self, occupancy: OccupancyMap, half_size_m: float = PR2_BASE_HALF_SIZE_M,
                  outline_spacing_m: float = 0.04):
         self.occupancy = occupancy
-        # the base's edge and inside (something small may stand under the base's middle)
-        self.outline = np.vstack([square_outline(half_size_m, outline_spacing_m),
-                                  square_grid(half_size_m, outline_spacing_m)])
+        # the base's edge, then its inside (something small may stand under the base),
+        # farthest from the middle first: inside points nearer the middle than the nearest
+        # obstacle can be are not looked up (see `_is_free`)
+        edge = square_outline(half_size_m, outline_spacing_m)
+        inside = square_grid(half_size_m, outline_spacing_m)
+        radius = np.hypot(inside[:, 0], inside[:, 1])
+        order = np.argsort(-radius, kind="stable")
+        self.outline = np.vstack([edge, inside[order]])
+        self._inside_radius_ascending = radius[order][::-1].copy()
         self.half_size_m = half_size_m
         #: (robot-frame points, the map they are checked against, the coarse cells of that
         #: map from which an obstacle may be within their reach)
@@ -252,9 +258,14 @@ class FootprintChecker:
         c, s = math.cos(yaw), math.sin(yaw)
         rotation = np.array([[c, s], [-s, c]])
         # each part is checked only if something it can touch may be within its reach
-        if lower <= self._sure_free and \
-                self.occupancy.blocked_at(self.outline @ rotation + (x, y)).any():
-            return False
+        if lower <= self._sure_free:
+            # (inside points within the clearance, less the margin, are free: skipped)
+            pad = self.occupancy.margin + self.occupancy.resolution
+            skipped = int(np.searchsorted(self._inside_radius_ascending, lower - pad,
+                                          side="left"))
+            points = self.outline[:len(self.outline) - skipped]
+            if self.occupancy.blocked_at(points @ rotation + (x, y)).any():
+                return False
         for points, occupancy, near in self.carried_groups:
             # (its own map holds only what rises to its height: mostly far away)
             i, j = occupancy.coarse_cell(x, y)
