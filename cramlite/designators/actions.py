@@ -50,6 +50,7 @@ from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescr
 from cramlite.designators.tasks import recorded
 from cramlite.motion.ik import ARMS
 from cramlite.motion.trajectory import wrap_angle
+from cramlite.process_cache import ProcessCache
 from cramlite.world.bodies import quat_yaw
 from cramlite.world.bullet import p
 from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT
@@ -554,12 +555,23 @@ def _upper_body_outline(ctx: RobotContext, arms: set[str]) -> dict[float, np.nda
             continue
         key = ("outline", part, tuple(round(joints[n], 2) for n in names))
         if key not in ctx.world.cache:
-            groups: dict[float, list[np.ndarray]] = {}
-            with ctx.collisions.preserved():
-                robot.set_base_pose(0.0, 0.0, 0.0)
-                for points in ctx.collisions.upper_body_points(links):
-                    _stick_out(points, ctx.checker.half_size_m, groups)
-            ctx.world.cache[key] = {b: np.vstack(p) for b, p in groups.items()}
+            # (a pure function of the robot's model: kept for the process too)
+            ctx.world.cache[key] = _OUTLINES.get_or_compute(
+                key, lambda links=links: _part_outline(ctx, links))
         for bucket, points in ctx.world.cache[key].items():
             out.setdefault(bucket, []).append(points)
     return {b: np.vstack(p) for b, p in out.items()}
+
+
+def _part_outline(ctx: RobotContext, links: list[int]) -> dict[float, np.ndarray]:
+    """What of these robot links sticks out of the base as they stand (by height)."""
+    groups: dict[float, list[np.ndarray]] = {}
+    with ctx.collisions.preserved():
+        ctx.world.robot.set_base_pose(0.0, 0.0, 0.0)
+        for points in ctx.collisions.upper_body_points(links):
+            _stick_out(points, ctx.checker.half_size_m, groups)
+    return {b: np.vstack(p) for b, p in groups.items()}
+
+
+#: Outlines of the arms (and torso and head) kept for the process, at most 5 000.
+_OUTLINES: ProcessCache[dict[float, np.ndarray]] = ProcessCache(5_000)

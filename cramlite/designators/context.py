@@ -23,13 +23,14 @@ from cramlite.motion.arm_planner import ArmMotionPlanner, ArmPlannerOptions
 from cramlite.motion.base_planner import BaseMotionPlanner, BasePlannerOptions
 from cramlite.motion.collision import CollisionChecker, HeldObject
 from cramlite.motion.footprint import FLOOR_HEIGHT_M, FootprintChecker, OccupancyMap
-from cramlite.motion.ik import tool_frame
+from cramlite.motion.ik import ARMS, arm_ik, tool_frame
 from cramlite.motion.trajectory import (
     ACCELERATION_TIME_S,
     BaseTrajectory,
     JointLimits,
     JointTrajectory,
 )
+from cramlite.process_cache import ProcessCache
 from cramlite.trace.format import TraceWriter
 from cramlite.world.bodies import Quat, Vec3
 from cramlite.world.world import World
@@ -97,10 +98,9 @@ def _joint_state(world: World) -> tuple[float, ...]:
     return tuple(round(v, 3) for v in world.world_joint_positions().values())
 
 
-#: 2D maps kept for the process, at most (about 1 MB each; a map is a pure function of
+#: 2D maps kept for the process, at most 48 (about 1 MB each; a map is a pure function of
 #: the boxes and outlines it is drawn from).
-SHARED_MAPS = 48
-_MAPS: dict[tuple, OccupancyMap] = {}
+_MAPS: ProcessCache[OccupancyMap] = ProcessCache(48)
 
 
 def occupancy_map(world: World, min_top_m: float = 0.0) -> OccupancyMap:
@@ -117,13 +117,8 @@ def occupancy_map(world: World, min_top_m: float = 0.0) -> OccupancyMap:
                         if hi[2] <= FLOOR_HEIGHT_M or hi[2] > max(min_top_m, FLOOR_HEIGHT_M))
         # (maps are kept for the process too, by what they are drawn from: another world
         # of the same kitchen, e.g. the next setup a bench worker loads, reuses them)
-        found = _MAPS.get(counted)
-        if found is None:
-            found = OccupancyMap(boxes, min_top_m=min_top_m)
-            if len(_MAPS) >= SHARED_MAPS:
-                _MAPS.clear()
-            _MAPS[counted] = found
-        world.cache[key] = found
+        world.cache[key] = _MAPS.get_or_compute(
+            counted, lambda: OccupancyMap(boxes, min_top_m=min_top_m))
     return world.cache[key]
 
 
@@ -166,6 +161,8 @@ class RobotContext:
         self.footprint_stale = True
         self.base_planner = BaseMotionPlanner(self.checker, self.planner_options)
         self.collisions = collision_checker(self.world)
+        for arm in ARMS:  # the arms' IK models: built once per process, with the robot's
+            arm_ik(arm)   # other models (loading, not planning: outside a trial's wall time)
         self.limits = robot_limits(self.world, self.options.joint_speed_scale)
         self.arm_planner = ArmMotionPlanner(self.limits, self.arm_planner_options)
         self.tasks = TaskTree(lambda: self.time_s)

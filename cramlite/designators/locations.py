@@ -39,6 +39,7 @@ from cramlite.designators.objects import ObjectDesignator
 from cramlite.motion.collision import HeldObject
 from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names, tool_frame
 from cramlite.motion.trajectory import densify
+from cramlite.process_cache import ProcessCache
 from cramlite.world.bodies import Quat, Vec3, quat_yaw
 from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT, TORSO_UP_M
 
@@ -288,21 +289,32 @@ def carry_joints(ctx: RobotContext, arm: str, grasp: str, grasp_height: float,
     key = ("carry", arm, grasp, round(grasp_height, 3), round(torso_m, 3))
     cache = ctx.world.cache
     if key not in cache:
-        ik = arm_ik(arm)
-        rng = np.random.default_rng(0)
-        seeds = [{**PARK_JOINTS[arm], TORSO_JOINT: torso_m}, reaching_seed(arm)]
-        seeds += [ik.from_q(ik.random_q(rng)) for _ in range(CARRY_STARTS - len(seeds))]
-        best, best_low = None, -np.inf
-        for seed in seeds:
-            solution = ik.solve(carry_pose(grasp, grasp_height, arm), rng, seed,
-                                fixed_torso_m=torso_m, restarts=0)
-            if solution is None:
-                continue
-            low = _lowest_outside(ctx, solution.joints)
-            if low > best_low:
-                best, best_low = solution.joints, low
-        cache[key] = best
+        # (a pure function of the robot's model: kept for the process too)
+        cache[key] = _CARRY.get_or_compute(
+            key, lambda: _solve_carry(ctx, arm, grasp, grasp_height, torso_m))
     return cache[key]
+
+
+def _solve_carry(ctx: RobotContext, arm: str, grasp: str, grasp_height: float,
+                 torso_m: float) -> dict[str, float] | None:
+    ik = arm_ik(arm)
+    rng = np.random.default_rng(0)
+    seeds = [{**PARK_JOINTS[arm], TORSO_JOINT: torso_m}, reaching_seed(arm)]
+    seeds += [ik.from_q(ik.random_q(rng)) for _ in range(CARRY_STARTS - len(seeds))]
+    best, best_low = None, -np.inf
+    for seed in seeds:
+        solution = ik.solve(carry_pose(grasp, grasp_height, arm), rng, seed,
+                            fixed_torso_m=torso_m, restarts=0)
+        if solution is None:
+            continue
+        low = _lowest_outside(ctx, solution.joints)
+        if low > best_low:
+            best, best_low = solution.joints, low
+    return best
+
+
+#: Carry poses kept for the process, at most 2 000.
+_CARRY: ProcessCache[dict[str, float] | None] = ProcessCache(2_000)
 
 
 #: IK starts tried for a carry pose.

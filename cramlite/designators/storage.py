@@ -37,6 +37,7 @@ from cramlite.designators.motions import MoveArmJointsMotion, MoveGripperMotion,
 from cramlite.designators.tasks import recorded
 from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names
 from cramlite.motion.trajectory import time_along_path, wrap_angle
+from cramlite.process_cache import ProcessCache
 from cramlite.world.bodies import Vec3
 from cramlite.world.containers import Container
 from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT
@@ -50,11 +51,10 @@ HANDLE_CLEARANCE_M = 0.10
 MAX_SQUINT_RAD = math.radians(60)
 #: Stages of the opening at which the base pose must be clear of the drawer or door.
 FOOTPRINT_STAGES = 5
-#: Handle IK chains kept for the process, at most (a pure function of the handle's poses,
-#: the base pose, the arm and the torso; thousands of solves for a cupboard's door).
-SHARED_HANDLE_IK = 20_000
-_HANDLE_IK: dict[tuple, tuple[list[dict[str, float]], dict, dict] | None] = {}
-_UNSOLVED = object()
+#: Handle IK chains kept for the process, at most 20 000 (a pure function of the handle's
+#: poses, the base pose, the arm and the torso; thousands of solves for a cupboard's door).
+_HANDLE_IK: ProcessCache[tuple[list[dict[str, float]], dict, dict] | None] = \
+    ProcessCache(20_000)
 
 
 @dataclass(frozen=True)
@@ -202,15 +202,8 @@ class AccessingLocation:
         if key not in cache:
             # (also kept for the process, by the handle's poses themselves: another world
             # of the same kitchen, e.g. the next setup a bench worker loads, reuses it)
-            shared = (key, path.key)
-            chain = _HANDLE_IK.get(shared, _UNSOLVED)
-            if chain is _UNSOLVED:  # (threads of one worker may both solve it: same answer)
-                rng = np.random.default_rng([zlib.crc32(repr(key).encode())])
-                chain = _handle_ik(arm, base, torso, path, rng)
-                if len(_HANDLE_IK) >= SHARED_HANDLE_IK:
-                    _HANDLE_IK.clear()
-                _HANDLE_IK[shared] = chain
-            cache[key] = chain
+            cache[key] = _HANDLE_IK.get_or_compute((key, path.key), lambda: _handle_ik(
+                arm, base, torso, path, np.random.default_rng([zlib.crc32(repr(key).encode())])))
         return cache[key]
 
 
