@@ -76,6 +76,7 @@ class CollisionChecker:
         self.spheres, self.mass_spheres = self._link_spheres()
         self._link_frames: LinkFrames | None = None
         self._mass_centres: dict[int, np.ndarray] = {}
+        self.link_frames()  # (Pinocchio's model of the robot, calibrated: with the world)
 
     def link_frames(self) -> LinkFrames:
         """The robot's link frames by Pinocchio (for the broadphase of whole motions)."""
