@@ -275,7 +275,38 @@ class CollisionScene:
         self.obstacles = obstacles
         arr = np.array(boxes, dtype=float).reshape(-1, 2, 3)
         self._lo, self._hi = arr[:, 0, :].copy(), arr[:, 1, :].copy()
+        #: Obstacles that are boxes turned about the vertical (a door swung open), by row:
+        #: (centre, rotation, half extents). Their axis-aligned boxes cover far more than
+        #: they do; spheres that reach into one are tested against the box itself.
+        self._turned: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._env_rows = {index: row for row, (body, index, _) in enumerate(obstacles)
+                          if body == world.environment}
+        self._measure_turned([index for _, index in world.moving_environment_links()])
         self.checks = 0
+
+    def _measure_turned(self, indices: Sequence[int]) -> None:
+        for index in indices:
+            row = self._env_rows.get(index)
+            if row is None:
+                continue
+            box = self.world.turned_box(index)
+            if box is None:
+                self._turned.pop(row, None)
+            else:
+                self._turned[row] = box
+
+    def _outside_turned(self, near: np.ndarray, centres: np.ndarray,
+                        radii_sq: np.ndarray) -> None:
+        """Clear the entries of `near` (spheres x obstacles) whose sphere (centres, squared
+        radii per row) reaches into a turned obstacle's axis-aligned box but not into the
+        box itself."""
+        for row, (centre, rotation, half) in self._turned.items():
+            hits = np.flatnonzero(near[:, row])
+            if not len(hits):
+                continue
+            local = (centres[hits] - centre) @ rotation  # in the box's frame
+            gap = np.maximum(np.abs(local) - half, 0.0)
+            near[hits, row] = (gap * gap).sum(axis=1) < radii_sq[hits]
 
     def refresh_obstacles(self, joint: str) -> None:
         """Measure again the boxes of what a drawer's or door's joint moves (its links)
@@ -288,6 +319,7 @@ class CollisionScene:
             else:
                 self._lo[row], self._hi[row] = p.getAABB(body, -1,
                                                          physicsClientId=self.client)
+        self._measure_turned(sorted(moved))
 
     def set_state(self, q: Sequence[float]) -> None:
         """Put the robot's moving joints at q (held objects follow in `_place_held`)."""
@@ -327,7 +359,9 @@ class CollisionScene:
         if len(close):
             c = centres[:, None, :]
             gap = np.maximum(np.maximum(self._lo[close] - c, c - self._hi[close]), 0.0)
-            near[:, close] = (gap * gap).sum(axis=2) < np.tile(self._radii_sq, (s, 1))
+            radii_sq = np.tile(self._radii_sq, (s, 1))
+            near[:, close] = (gap * gap).sum(axis=2) < radii_sq
+            self._outside_turned(near, centres, radii_sq[:, 0])
         return near.reshape(s, len(self._rows), len(self._lo))
 
     def _pairs(self) -> np.ndarray:
@@ -347,10 +381,11 @@ class CollisionScene:
             return np.zeros((0, 2), dtype=int)
         c = centres[:, None, :]
         gap = np.maximum(np.maximum(self._lo[close] - c, c - self._hi[close]), 0.0)
-        near = np.einsum("pok,pok->po", gap, gap) < self._mass_radii_sq[:, None]
-        pairs = np.argwhere(near)
-        pairs[:, 1] = close[pairs[:, 1]]
-        return pairs
+        near = np.zeros((len(centres), len(self._lo)), dtype=bool)
+        near[:, close] = np.einsum("pok,pok->po", gap, gap) < self._mass_radii_sq[:, None]
+        if self._turned:
+            self._outside_turned(near, centres, self._mass_radii_sq)
+        return np.argwhere(near)
 
     def states_free(self, states: np.ndarray, order: Sequence[int] | None = None) -> bool:
         """Every state (rows of joint vectors) free: one broadphase for all of them, then

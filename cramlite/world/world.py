@@ -290,6 +290,25 @@ class World:
             out.append((corners @ matrix.T + centre)[:, :2])
         return out
 
+    def turned_box(self, index: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(centre, rotation whose columns are its axes, half extents) of an environment
+        link made of one box and turned about the vertical (a door swung open), whose
+        axis-aligned bounds cover far more than it does; None otherwise."""
+        shapes = p.getCollisionShapeData(self.environment, index, physicsClientId=self.client)
+        if index < 0 or len(shapes) != 1 or shapes[0][2] != p.GEOM_BOX:
+            return None
+        state = p.getLinkState(self.environment, index, physicsClientId=self.client)
+        if abs(math.sin(2 * quat_yaw(state[5]))) < TURNED_SIN:
+            return None
+        centre, rotation = p.multiplyTransforms(state[4], state[5], shapes[0][5], shapes[0][6])
+        matrix = np.array(p.getMatrixFromQuaternion(rotation)).reshape(3, 3)
+        return np.asarray(centre), matrix, np.asarray(shapes[0][3]) / 2
+
+    def moving_environment_links(self) -> list[tuple[str, int]]:
+        """(name, index) of the environment links with a shape that a drawer's or door's
+        joint moves."""
+        return self._environment_links_by_motion()[1]
+
     def environment_footprints(self) -> list[tuple[str, Vec3, Vec3, list[np.ndarray] | None]]:
         """`environment_boxes` with the outlines of the turned links (see `link_outlines`):
         what 2D maps are drawn from."""
