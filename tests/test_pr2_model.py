@@ -50,10 +50,11 @@ def test_joint_map_gives_the_same_forward_kinematics(seed: int) -> None:
             assert np.allclose(frame.translation, pos, atol=1e-5)
 
 
-@pytest.mark.parametrize("arm", ["right", "left"])
-def test_link_frames_by_pinocchio_are_pybullets(arm: str) -> None:
-    """The motion broadphase takes every link's frame from Pinocchio: at a turned, moved
-    base, with the other joints anywhere, they must be PyBullet's frames."""
+@pytest.mark.parametrize("arm, torso", [("right", True), ("left", True), ("right", False)])
+def test_link_frames_by_pinocchio_are_pybullets(arm: str, torso: bool) -> None:
+    """The motion broadphase takes every link's frame from Pinocchio (the chain composed
+    for all states at once): at a turned, moved base, with the other joints anywhere, they
+    must be PyBullet's frames, whether the torso moves with the arm or not."""
     from cramlite.designators.context import collision_checker
     from cramlite.motion.ik import arm_joint_names
     from cramlite.world import load_setup
@@ -66,12 +67,16 @@ def test_link_frames_by_pinocchio_are_pybullets(arm: str) -> None:
         robot.set_joint_positions({"l_elbow_flex_joint": -1.0, "torso_lift_joint": 0.2,
                                    "r_gripper_l_finger_joint": 0.3})
         checker = collision_checker(world)
-        names = ["torso_lift_joint", *arm_joint_names(arm)]
+        names = ["torso_lift_joint"] * torso + arm_joint_names(arm)
         scene = checker.scene(names, [])
-        states = rng.uniform(-2.0, 2.0, size=(12, len(names)))
-        states[:, 0] = rng.uniform(0.0, 0.3, 12)
+        states = rng.uniform(-4.0, 4.0, size=(12, len(names)))
+        if torso:
+            states[:, 0] = rng.uniform(0.0, 0.3, 12)
         positions, rotations = checker.link_frames().frames(names, states, scene.query_links)
         assert positions.shape == (12, len(scene.query_links), 3)
+        # (a few states are placed one by one, many all at once: both must agree)
+        few = checker.link_frames().frames(names, states[:3], scene.query_links)
+        assert np.allclose(few[0], positions[:3]) and np.allclose(few[1], rotations[:3])
         for s, q in enumerate(states):
             scene.set_state(q)
             bullet = p.getLinkStates(robot.body, scene.query_links,
