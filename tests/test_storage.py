@@ -100,6 +100,33 @@ def test_opening_falls_through_when_the_first_accessing_pose_fails(c2_world) -> 
         assert any("closed drawer_2" in line for line in ctx.log)
 
 
+def test_a_stretch_no_base_pose_could_follow_opening_is_not_tried_closing(
+        c2_world, monkeypatch) -> None:
+    """The cupboard's door cannot be pulled all the way open from one base pose: it is
+    opened in two stages. Closing, the whole way back is not searched again (the handle's
+    path is the same), and the door still closes, in stages."""
+    from cramlite.designators import storage
+
+    world = c2_world
+    grounded = []
+    ground = storage.AccessingLocation.ground
+
+    def recording(self, ctx):
+        grounded.append((round(self.start, 2), round(self.end, 2)))
+        return ground(self, ctx)
+
+    monkeypatch.setattr(storage.AccessingLocation, "ground", recording)
+    with simulated_robot(world, seed=1) as ctx:
+        ParkArmsAction().perform(ctx)
+        OpenAction("cupboard").perform(ctx)
+        assert grounded[0] == (0.0, 2.3) and len(grounded) >= 3  # one go failed: stages
+        assert ("cupboard", 0.0, 2.3, frozenset({"right", "left"})) in ctx.unfollowable
+        grounded.clear()
+        CloseAction("cupboard").perform(ctx)
+        assert (2.3, 0.0) not in grounded and grounded[0] == (2.3, 1.15)
+        assert world.world_joint_positions()["cupboard_door_joint"] == pytest.approx(0.0)
+
+
 def test_an_unknown_container_is_a_typed_failure(c2_world) -> None:
     with simulated_robot(c2_world) as ctx, pytest.raises(PlanFailure, match="no container"):
         OpenAction("oven").perform(ctx)

@@ -375,9 +375,17 @@ def _move_stage(ctx: RobotContext, container: Container, start: float, end: floa
                 arms: list[str], tried: list[str]) -> bool:
     """Follow the handle from `start` to `end` from the first base pose and arm that can;
     False (and what was tried) if none can."""
+    # the handle's path is the same either way: a stretch no base pose could follow when
+    # opening (with these arms or more) is not tried again when closing, and vice versa
+    stretch = (container.name, round(min(start, end), 4), round(max(start, end), 4))
+    if any(key[:3] == stretch and set(arms) <= key[3] for key in ctx.unfollowable):
+        tried.append(f"{start:.2f} to {end:.2f}: no base pose could follow it before")
+        return False
     location = AccessingLocation(container, start, end, arms)
     verb = "opened" if end > start else "closed"
+    offered = False
     for attempt, access in enumerate(location.ground(ctx)):
+        offered = True
         if attempt >= ctx.options.max_candidates:
             break
         try:
@@ -388,6 +396,8 @@ def _move_stage(ctx: RobotContext, container: Container, start: float, end: floa
         except PlanFailure as failure:
             tried.append(f"{access.describe()}: {failure.kind}: {failure.reason}")
             ParkArmsAction().perform(ctx)
+    if not offered:
+        ctx.unfollowable.add((*stretch, frozenset(arms)))
     rejected = location.describe_rejections()
     if rejected:
         tried.append(f"{start:.2f} to {end:.2f}: {rejected}")
