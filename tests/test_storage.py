@@ -271,3 +271,18 @@ def test_a_container_the_free_hand_cannot_open_is_opened_with_both_hands_free() 
         assert after.index(("PlaceAction", "succeeded")) < \
             after.index(("OpenAction", "succeeded")) < after.index(("PickUpAction", "succeeded"))
         assert steps[-1] == ("CloseAction", "succeeded")
+
+
+def test_an_item_in_a_drawer_is_not_grasped_from_the_front() -> None:
+    """The fingers of a front grasp would pass through a drawer's sides: an item lying in a
+    drawer is offered the top grasp only (and its pick-up tries no front grasp); one in the
+    cupboard or on the counter keeps both."""
+    from cramlite.designators.actions import _grasps_in
+    from cramlite.designators.storage import container_of
+
+    with World.from_setup(load_setup("c1")) as world, simulated_robot(world) as ctx:
+        for name, expected in (("bowl", ["top"]), ("cup", ["front", "top"]),
+                               ("milk", ["front", "top"])):
+            lo, hi = world.objects[name].aabb()
+            assert _grasps_in(ctx, container_of(ctx, name), lo[2], hi[2] - lo[2]) == \
+                expected, name

@@ -304,12 +304,13 @@ class TransportAction:
         """Navigate and pick up, trying base poses best first; an arm and grasp that could
         not put the object down at the goal are not used. A goal inside a `closed`
         container (at `local` in its inside's frame) is planned as if it were open."""
-        from cramlite.designators.storage import virtually_open
+        from cramlite.designators.storage import container_of, virtually_open
         (x, y, z), orientation = obj.pose(ctx)
         height = obj.height_m(ctx)
         tried: list[str] = []
         last: PlanFailure | None = None
-        grasps = list(self.grasps or grasps_for(height))
+        grasps = list(self.grasps or _grasps_in(ctx, container_of(ctx, obj.name), z,
+                                                height))
         arms = [a for a in (self.arms or ARMS) if a not in ctx.holding]
         location = CostmapLocation((x, y, z), {g: grasp_height_m(g, height) for g in grasps},
                                    obj.name, arms, PICK, orientation=orientation)
@@ -461,6 +462,24 @@ def _at(ctx: RobotContext, container, local: Vec3) -> Vec3:
     """A point given in a container's inside frame, in the world as it stands now."""
     return tuple(p.multiplyTransforms(*ctx.world.link_frame(container.inside_link), local,
                                       (0, 0, 0, 1))[0])
+
+
+def _grasps_in(ctx: RobotContext, container, bottom_z: float, height: float) -> list[str]:
+    """The grasps for an object (by its height), without the front grasp where the object
+    lies in a drawer whose sides rise above that grasp (the fingers would have to pass
+    through them: every base pose would be tried and fail)."""
+    grasps = grasps_for(height)
+    if container is None or container.kind != "drawer" or "front" not in grasps:
+        return grasps
+    frame = ctx.world.link_frame(container.inside_link)
+    rim = p.multiplyTransforms(*frame, container.inside_max, (0, 0, 0, 1))[0][2]
+    if bottom_z + grasp_height_m("front", height) < rim + FINGER_CLEARANCE_M:
+        return [g for g in grasps if g != "front"]
+    return grasps
+
+
+#: The fingers of a front grasp keep at least this much above a drawer's sides.
+FINGER_CLEARANCE_M = 0.02
 
 
 def footprint_outline(points_xy: np.ndarray, spacing: float) -> np.ndarray:
