@@ -375,8 +375,9 @@ def _move_stage(ctx: RobotContext, container: Container, start: float, end: floa
                 arms: list[str], tried: list[str]) -> bool:
     """Follow the handle from `start` to `end` from the first base pose and arm that can;
     False (and what was tried) if none can."""
-    # the handle's path is the same either way: a stretch no base pose could follow when
-    # opening (with these arms or more) is not tried again when closing, and vice versa
+    # the handle's path is the same either way: a stretch for which no base pose checked
+    # could follow it when opening (with these arms or more) is not searched again when
+    # closing in the same trial, and vice versa (it is done in stages straight away)
     stretch = (container.name, round(min(start, end), 4), round(max(start, end), 4))
     if any(key[:3] == stretch and set(arms) <= key[3] for key in ctx.unfollowable):
         tried.append(f"{start:.2f} to {end:.2f}: no base pose could follow it before")

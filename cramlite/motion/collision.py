@@ -7,10 +7,11 @@ manipulated one, and no held object is inside the kitchen or another item, each
 allowing `tolerance_m` of penetration (PyBullet uses convex hulls of the PR2's meshes).
 
 Only links that move can newly collide, so only they are checked (PITFALLS: the arm's
-links are ~4x cheaper than the whole robot). A broadphase of axis-aligned boxes (the
-links' AABBs against the obstacles' boxes, one numpy test) leaves PyBullet's exact
-query (`getClosestPoints`, which reports penetrations even with the robot's collision
-filter off) to the few link-obstacle pairs that can touch.
+links are ~4x cheaper than the whole robot). A broadphase of spheres (one per moving link
+and held object) against the obstacles' boxes (axis-aligned, or turned where a door has
+swung open), a few numpy calls for one state or for every state of a motion, leaves
+PyBullet's exact query (`getClosestPoints`, which reports penetrations even with the
+robot's collision filter off) to the few link-obstacle pairs that can touch.
 """
 
 from __future__ import annotations
