@@ -285,11 +285,15 @@ def carry_joints(ctx: RobotContext, arm: str, grasp: str, grasp_height: float,
     """The arm's joints (torso kept) that carry an object grasped with `grasp` upright in
     front of the robot (see `carry_pose`); None if the arm cannot. Of the solutions from
     several starts, the one whose links stick out of the base least low down (so that the
-    robot can drive up to a table carrying it); solved once per world, from fixed starts."""
-    key = ("carry", arm, grasp, round(grasp_height, 3), round(torso_m, 3))
+    robot can drive up to a table carrying it; the rest of the robot as it stands now
+    counts there too); solved once per world and standing of the rest, from fixed starts."""
+    own = {TORSO_JOINT, *arm_joint_names(arm)}
+    rest = tuple(round(v, 3) for n, v in sorted(ctx.world.robot.joint_positions().items())
+                 if n not in own)
+    key = ("carry", arm, grasp, round(grasp_height, 3), round(torso_m, 3), rest)
     cache = ctx.world.cache
     if key not in cache:
-        # (a pure function of the robot's model: kept for the process too)
+        # (a pure function of the robot's model and joints: kept for the process too)
         cache[key] = _CARRY.get_or_compute(
             key, lambda: _solve_carry(ctx, arm, grasp, grasp_height, torso_m))
     return cache[key]
