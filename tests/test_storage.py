@@ -103,8 +103,8 @@ def test_opening_falls_through_when_the_first_accessing_pose_fails(c2_world) -> 
 def test_a_stretch_no_base_pose_could_follow_opening_is_not_tried_closing(
         c2_world, monkeypatch) -> None:
     """The cupboard's door cannot be pulled all the way open from one base pose: it is
-    opened in two stages. Closing, the whole way back is not searched again (the handle's
-    path is the same), and the door still closes, in stages."""
+    opened in stages. Closing, the whole way back in one go is not searched again, and the
+    door still closes, in stages."""
     from cramlite.designators import storage
 
     world = c2_world
@@ -121,6 +121,9 @@ def test_a_stretch_no_base_pose_could_follow_opening_is_not_tried_closing(
         OpenAction("cupboard").perform(ctx)
         assert grounded[0] == (0.0, 2.3) and len(grounded) >= 3  # one go failed: stages
         assert ("cupboard", 0.0, 2.3, frozenset({"right", "left"})) in ctx.unfollowable
+        # (only the whole swing is remembered: a stage that failed from here may well
+        # work from where the robot stands later, and skipping it would give up)
+        assert all(key[1:3] == (0.0, 2.3) for key in ctx.unfollowable)
         grounded.clear()
         CloseAction("cupboard").perform(ctx)
         assert (2.3, 0.0) not in grounded and grounded[0] == (2.3, 1.15)

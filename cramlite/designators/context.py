@@ -170,7 +170,7 @@ class RobotContext:
         self.ik_seeds: dict[tuple[str, str], dict[str, float]] = {}
         #: Containers this context opened and has not closed yet.
         self.opened: list[str] = []
-        #: Stretches of a container's opening no base pose offered to follow, either way:
+        #: Whole swings of a container no base pose offered to follow, either way:
         #: (container, from, to, arms) with from < to (see `storage._move_stage`).
         self.unfollowable: set[tuple[str, float, float, frozenset[str]]] = set()
         #: Arm motions that needed OMPL (the straight path collided) and all arm motions.

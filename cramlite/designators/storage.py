@@ -356,7 +356,8 @@ def _move_container(ctx: RobotContext, name: str, target: str, arms: Sequence[st
         values = np.linspace(now, goal, stages + 1)
         done = 0
         for start, end in zip(values[:-1], values[1:], strict=True):
-            if not _move_stage(ctx, container, float(start), float(end), free, tried):
+            if not _move_stage(ctx, container, float(start), float(end), free, tried,
+                               whole=stages == 1):
                 break
             done += 1
         if done == stages:
@@ -372,14 +373,16 @@ def _move_container(ctx: RobotContext, name: str, target: str, arms: Sequence[st
 
 
 def _move_stage(ctx: RobotContext, container: Container, start: float, end: float,
-                arms: list[str], tried: list[str]) -> bool:
+                arms: list[str], tried: list[str], whole: bool = False) -> bool:
     """Follow the handle from `start` to `end` from the first base pose and arm that can;
-    False (and what was tried) if none can."""
-    # the handle's path is the same either way: a stretch for which no base pose checked
-    # could follow it when opening (with these arms or more) is not searched again when
-    # closing in the same trial, and vice versa (it is done in stages straight away)
+    False (and what was tried) if none can. `whole`: the whole way in one go."""
+    # a whole swing for which no base pose checked could follow the handle (opening, say)
+    # is not searched again the other way in the same trial with the same or fewer arms:
+    # it is done in stages straight away (at worst in one stage more than needed; a stage
+    # is never skipped, so no opening or closing that can be done is given up)
     stretch = (container.name, round(min(start, end), 4), round(max(start, end), 4))
-    if any(key[:3] == stretch and set(arms) <= key[3] for key in ctx.unfollowable):
+    if whole and any(key[:3] == stretch and set(arms) <= key[3]
+                     for key in ctx.unfollowable):
         tried.append(f"{start:.2f} to {end:.2f}: no base pose could follow it before")
         return False
     location = AccessingLocation(container, start, end, arms)
@@ -397,7 +400,7 @@ def _move_stage(ctx: RobotContext, container: Container, start: float, end: floa
         except PlanFailure as failure:
             tried.append(f"{access.describe()}: {failure.kind}: {failure.reason}")
             ParkArmsAction().perform(ctx)
-    if not offered:
+    if whole and not offered:
         ctx.unfollowable.add((*stretch, frozenset(arms)))
     rejected = location.describe_rejections()
     if rejected:
