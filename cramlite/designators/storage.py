@@ -428,7 +428,9 @@ def _follow(ctx: RobotContext, container: Container, access: AccessPose) -> None
 def _let_go(ctx: RobotContext, container: Container, access: AccessPose) -> None:
     """After a failure at the handle: open the gripper and back off the handle (to the
     pre-grasp, or the retreat if the container got to the end), so the arm can be parked
-    (from around the handle no path that may not touch it is free)."""
+    (from around the handle no path that may not touch it is free). A handle stopped part
+    of the way (a real robot's failure: simulated motions run whole or not at all) may
+    leave no free way back to the pre-grasp; then the arm stays, as before."""
     touch = (container.handle,)
     value = ctx.modules.world_joint_positions()[container.joint]
     back = access.post_joints if abs(value - access.values[-1]) < 1e-3 else access.pre_joints
