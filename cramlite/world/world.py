@@ -274,6 +274,25 @@ class World:
         """The xy corners (as seen from above) of each box of a turned environment link (a
         door swung open), where its axis-aligned bounds would cover far more than it does;
         None for a link that stands square to the axes or is not made of boxes."""
+        boxes = self._turned_boxes(index)
+        if boxes is None:
+            return None
+        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1)
+                            for sz in (-1, 1)])
+        return [((corners * half) @ matrix.T + centre)[:, :2]
+                for centre, matrix, half in boxes]
+
+    def turned_box(self, index: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(centre, rotation whose columns are its axes, half extents) of an environment
+        link made of one box and turned about the vertical (a door swung open), whose
+        axis-aligned bounds cover far more than it does; None otherwise."""
+        boxes = self._turned_boxes(index)
+        return boxes[0] if boxes is not None and len(boxes) == 1 else None
+
+    def _turned_boxes(self, index: int,
+                      ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]] | None:
+        """(centre, rotation, half extents) of each box of an environment link made of
+        boxes and turned about the vertical; None for any other link."""
         shapes = p.getCollisionShapeData(self.environment, index, physicsClientId=self.client)
         if index < 0 or not shapes or any(shape[2] != p.GEOM_BOX for shape in shapes):
             return None
@@ -283,26 +302,10 @@ class World:
         out = []
         for shape in shapes:
             centre, rotation = p.multiplyTransforms(state[4], state[5], shape[5], shape[6])
-            matrix = np.array(p.getMatrixFromQuaternion(rotation)).reshape(3, 3)
-            half = np.asarray(shape[3]) / 2
-            corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1)
-                                for sz in (-1, 1)]) * half
-            out.append((corners @ matrix.T + centre)[:, :2])
+            out.append((np.asarray(centre),
+                        np.array(p.getMatrixFromQuaternion(rotation)).reshape(3, 3),
+                        np.asarray(shape[3]) / 2))
         return out
-
-    def turned_box(self, index: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """(centre, rotation whose columns are its axes, half extents) of an environment
-        link made of one box and turned about the vertical (a door swung open), whose
-        axis-aligned bounds cover far more than it does; None otherwise."""
-        shapes = p.getCollisionShapeData(self.environment, index, physicsClientId=self.client)
-        if index < 0 or len(shapes) != 1 or shapes[0][2] != p.GEOM_BOX:
-            return None
-        state = p.getLinkState(self.environment, index, physicsClientId=self.client)
-        if abs(math.sin(2 * quat_yaw(state[5]))) < TURNED_SIN:
-            return None
-        centre, rotation = p.multiplyTransforms(state[4], state[5], shapes[0][5], shapes[0][6])
-        matrix = np.array(p.getMatrixFromQuaternion(rotation)).reshape(3, 3)
-        return np.asarray(centre), matrix, np.asarray(shapes[0][3]) / 2
 
     def moving_environment_links(self) -> list[tuple[str, int]]:
         """(name, index) of the environment links with a shape that a drawer's or door's
@@ -333,9 +336,7 @@ class World:
         key = ("links moved by", joint)
         if key not in self.cache:
             root = self.world_joints[joint]
-            parents = {j: p.getJointInfo(self.environment, j, physicsClientId=self.client)[16]
-                       for j in range(p.getNumJoints(self.environment,
-                                                     physicsClientId=self.client))}
+            parents = {j: info[16] for j, info in self._environment_joints().items()}
             moved = set()
             for link in parents:
                 j = link
@@ -346,6 +347,16 @@ class World:
             self.cache[key] = frozenset(moved)
         return self.cache[key]
 
+    def _environment_joints(self) -> dict[int, tuple]:
+        """PyBullet's joint info of every environment joint (its child link's index)."""
+        key = "environment joints"
+        if key not in self.cache:
+            self.cache[key] = {j: p.getJointInfo(self.environment, j,
+                                                 physicsClientId=self.client)
+                               for j in range(p.getNumJoints(self.environment,
+                                                             physicsClientId=self.client))}
+        return self.cache[key]
+
     def _environment_links_by_motion(self) -> tuple[list[tuple[str, int, Vec3, Vec3]],
                                                     list[tuple[str, int]]]:
         """The environment links with a shape: those that never move with their bounds
@@ -353,9 +364,7 @@ class World:
         key = "environment link boxes"
         if key not in self.cache:
             static, moving = [], []
-            parents = {j: p.getJointInfo(self.environment, j, physicsClientId=self.client)
-                       for j in range(p.getNumJoints(self.environment,
-                                                     physicsClientId=self.client))}
+            parents = self._environment_joints()
             for name, index in self.environment_links.items():
                 if not p.getCollisionShapeData(self.environment, index,
                                                physicsClientId=self.client):
