@@ -471,8 +471,7 @@ def _grasps_in(ctx: RobotContext, container, bottom_z: float, height: float) -> 
     grasps = grasps_for(height)
     if container is None or container.kind != "drawer" or "front" not in grasps:
         return grasps
-    frame = ctx.world.link_frame(container.inside_link)
-    rim = p.multiplyTransforms(*frame, container.inside_max, (0, 0, 0, 1))[0][2]
+    rim = _at(ctx, container, container.inside_max)[2]
     if bottom_z + grasp_height_m("front", height) < rim + FINGER_CLEARANCE_M:
         return [g for g in grasps if g != "front"]
     return grasps

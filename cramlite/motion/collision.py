@@ -254,7 +254,7 @@ class CollisionScene:
                                                                - checker.mass_centre(link))))
             self.parts.append((repr(h.name), body, -1))
         self._rows = np.array(rows, dtype=int)
-        self._row_list = [int(r) for r in rows]
+        self._row_list = rows  # (the list: indexing it in a state's broadphase is cheap)
         self._centres = np.array(centres, dtype=float).reshape(-1, 3)
         self._radii_sq = (np.array(radii, dtype=float) ** 2)[:, None]
         self._radius_max = max(radii, default=0.0)
