@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from cramlite.bench.store import TIMING_COLUMNS
+from cramlite.safe_names import trial_stem
 from cramlite.trace import read_trace
 from tests.conftest import ROOT, run_cli
 
@@ -69,11 +70,14 @@ def test_same_seed_same_rows_and_a_trial_reruns_alone(tmp_path: Path) -> None:
     assert f"{data['base_path_m']}" == row["base_path_m"]
     summary = (a / "summary.md").read_text()
     assert "| v1 | opm | 2 | 100% |" in summary
-    # --traces: one trace per trial, named by setup, strategy and trial, timed like the row
+    # --traces: one trace per trial, named by setup, plan, strategy and trial, timed like
+    # the row
     traces = sorted(p.name for p in (a / "traces").iterdir())
-    assert traces == ["v1-opm-0.jsonl", "v1-opm-1.jsonl", "v1-random-0.jsonl",
-                      "v1-random-1.jsonl"]
-    recorded = read_trace(a / "traces" / f"v1-random-{row['trial']}.jsonl")
+    assert traces == sorted(f"{trial_stem('v1', 'set-table', s, t)}.jsonl"
+                            for s in ("opm", "random") for t in (0, 1))
+    assert "v1-set-table-random-0-" in " ".join(traces)  # (a readable slug, then a hash)
+    recorded = read_trace(a / "traces" / f"{trial_stem('v1', 'set-table', 'random', row['trial'])}"
+                                         ".jsonl")
     assert recorded.header["seed"] == int(row["seed"])
     assert recorded.duration_s == pytest.approx(float(row["drive_s"]) + float(row["arm_s"]),
                                                 rel=0.01)

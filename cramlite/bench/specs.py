@@ -18,7 +18,17 @@ from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from cramlite.safe_names import inside, trial_stem
+
 FIXED_ORDER = "fixed-order"
+
+
+def trace_file(folder: str | Path, setup: str, plan: str, strategy: str, trial: int | str,
+               ) -> str:
+    """Where a bench writes a trial's trace: `folder/SLUG-HASH.jsonl`, a name made safe
+    from the setup, plan, strategy and index (a strategy `learned:../nn.model` stays in
+    the folder, and no two trials share a file)."""
+    return str(inside(folder, trial_stem(setup, plan, strategy, trial) + ".jsonl"))
 
 
 def trial_seed(batch_seed: int, setup_name: str, trial: int) -> int:
@@ -71,12 +81,12 @@ class BatchPlan:
     batch_seed: int
     plan: str = "set-table"
     all_orders: bool = False
-    #: Folder for the trials' traces ("" = no traces): SETUP-STRATEGY-TRIAL.jsonl.
+    #: Folder for the trials' traces ("" = no traces): see `trace_file`.
     trace_dir: str = ""
 
     def _trace(self, setup: str, strategy: str, trial: int) -> str:
-        return (str(Path(self.trace_dir) / f"{setup}-{strategy}-{trial}.jsonl")
-                if self.trace_dir else "")
+        return trace_file(self.trace_dir, setup, self.plan, strategy, trial) \
+            if self.trace_dir else ""
 
     def total(self) -> int:
         per_setup = self.trials * len(self.strategies)

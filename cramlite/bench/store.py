@@ -4,8 +4,13 @@ Rows are written and flushed as trials finish, so an interrupted batch loses not
 a rerun with the same folder skips the trials already there (resume). A trial is
 identified by its setup's name *and content hash*, plan, strategy, given order, index
 and batch seed; a folder that holds another setup under the same name, or was written
-with other columns, is refused rather than mixed. A line cut short by a kill is dropped
-on reading.
+with other columns, is refused rather than mixed.
+
+Each row is written with one `write` call to a file opened for appending (and synced to
+disk at most once a second), so a kill or a full disk can cut only the row being written.
+`repair` finds the end of the last complete CSV *record* (a cell may hold newlines, e.g. a
+plugin's exception text: cutting back to the last newline would keep half a row, and the
+next rows would be swallowed into its open quote) and cuts the file there.
 """
 
 from __future__ import annotations
@@ -13,6 +18,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import os
 import platform
 import sys
 import time
@@ -28,6 +34,8 @@ COLUMNS = ["setup", "setup_hash", "plan", "strategy", "given_order", "trial", "s
 TIMING_COLUMNS = ("wall_s", "robot_time_s", "worker")
 KEY_COLUMNS = ("setup", "setup_hash", "plan", "strategy", "given_order", "trial",
                "batch_seed")
+#: Rows are synced to disk at most this often (seconds); each is written whole anyway.
+SYNC_INTERVAL_S = 1.0
 
 
 class StoreMismatch(Exception):
@@ -43,15 +51,19 @@ class TrialStore:
         self.folder = Path(folder)
         self.folder.mkdir(parents=True, exist_ok=True)
         self.path = self.folder / "trials.csv"
+        self._synced = -SYNC_INTERVAL_S
 
     def rows(self) -> list[dict[str, str]]:
+        """The complete records (a row being written, or cut by a kill, is not one)."""
         if not self.path.exists():
             return []
-        text = self.path.read_text()
+        with self.path.open("rb") as handle:
+            data = handle.read()
+        text = data[:complete_records_end(data)].decode("utf-8", errors="replace")
         rows = []
-        for row in csv.DictReader(io.StringIO(text)):
+        for row in csv.DictReader(io.StringIO(text, newline="")):
             if None in row or any(row.get(c) is None for c in COLUMNS):
-                continue  # a line cut short by a kill
+                continue  # (a record of other columns)
             rows.append(row)
         return rows
 
@@ -78,21 +90,36 @@ class TrialStore:
                     "a new --out folder for a changed setup")
 
     def repair(self) -> None:
-        """Rewrite the file without a trailing partial line (after a hard kill)."""
+        """Cut the file after its last complete record (after a kill or a full disk)."""
         if not self.path.exists():
             return
-        text = self.path.read_text()
-        if text and not text.endswith("\n"):
-            self.path.write_text(text[: text.rfind("\n") + 1])
+        with self.path.open("rb") as handle:
+            data = handle.read()
+        end = complete_records_end(data)
+        if end < len(data):
+            with self.path.open("r+b") as handle:
+                handle.truncate(end)
 
     def append(self, row: dict[str, Any]) -> None:
+        """Append one row in a single write (the header first, into an empty file)."""
+        buffer = io.StringIO()
+        writer = csv.DictWriter(buffer, fieldnames=COLUMNS, extrasaction="ignore")
         new = not self.path.exists() or self.path.stat().st_size == 0
-        with self.path.open("a", newline="") as handle:
-            writer = csv.DictWriter(handle, fieldnames=COLUMNS, extrasaction="ignore")
-            if new:
-                writer.writeheader()
-            writer.writerow(row)
-            handle.flush()
+        if new:
+            writer.writeheader()
+        writer.writerow(row)
+        data = buffer.getvalue().encode("utf-8")
+        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        try:
+            written = os.write(fd, data)
+            if written != len(data):  # (a regular file takes it whole, or fails: disk full)
+                raise OSError(28, "No space left on device", str(self.path))
+            now = time.monotonic()
+            if now - self._synced >= SYNC_INTERVAL_S:
+                os.fsync(fd)
+                self._synced = now
+        finally:
+            os.close(fd)
 
     def write_metadata(self, args: dict[str, Any], executor: str) -> None:
         versions = {}
@@ -114,3 +141,54 @@ class TrialStore:
                 runs = []
         (self.folder / "metadata.json").write_text(json.dumps({**data, "runs": runs + [data]},
                                                               indent=2))
+
+
+class _Lines:
+    """The lines of a text (each with its newline) that remember where they have got to,
+    so that a CSV reader fed from them tells where each record ends."""
+
+    def __init__(self, text: str):
+        self.text = text
+        self.position = 0
+
+    def __iter__(self) -> _Lines:
+        return self
+
+    def __next__(self) -> str:
+        if self.position >= len(self.text):
+            raise StopIteration
+        newline = self.text.find("\n", self.position)
+        end = len(self.text) if newline < 0 else newline + 1
+        line = self.text[self.position:end]
+        self.position = end
+        return line
+
+
+def complete_records_end(data: bytes) -> int:
+    """The byte offset just after the last complete record of a trials.csv written with
+    this version's columns: a record that ends with a newline outside quotes (the last
+    one must also have every column). What lies past it is a record cut anywhere (inside
+    a quoted multi-line cell too). A file whose header is not this version's is left
+    whole (the bench refuses it, naming it)."""
+    text = data.decode("utf-8", errors="surrogateescape")  # (round-trips every byte)
+    lines = _Lines(text)
+    reader = csv.reader(lines, strict=True)
+    end = 0
+    try:
+        header = next(reader)
+        if not text[:lines.position].endswith("\n"):
+            return 0  # (the header itself cut short)
+        if header != COLUMNS:
+            return len(data)
+        end = lines.position
+        for record in reader:
+            if not text[:lines.position].endswith("\n"):
+                break
+            if len(record) != len(COLUMNS):
+                if lines.position >= len(text):
+                    break  # the last record, cut just after a newline inside a cell
+                continue  # (a malformed record in the middle: kept, `rows` skips it)
+            end = lines.position
+    except (csv.Error, StopIteration):  # (an open quote at the end: a cut cell)
+        pass
+    return len(text[:end].encode("utf-8", errors="surrogateescape"))

@@ -277,6 +277,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="skip the PNG plots (and the report's pictures and replays: it "
                             "has tables only; `cramlite report OUT` draws them later)")
     bench.add_argument("--traces", action="store_true",
-                       help="write each trial's trace to OUT/traces/SETUP-STRATEGY-TRIAL.jsonl "
-                            "(replay them with `cramlite replay`)")
+                       help="write each trial's trace to OUT/traces/SETUP-PLAN-STRATEGY-TRIAL-HASH"
+                            ".jsonl (the name made safe: a slug and a hash of the full "
+                            "names; replay them with `cramlite replay`)")
     bench.set_defaults(func=cmd_bench)

@@ -12,6 +12,7 @@ from cramlite.errors import UserInputError
 from cramlite.report.folder import BenchFolder, read_folder
 from cramlite.report.page import MEDIA, PageData, render_page
 from cramlite.report.trials import trial_id, trials_of_interest
+from cramlite.safe_names import safe_stem
 
 PAGE = "report.html"
 #: Default number of replay animations a report draws (each takes a few seconds).
@@ -107,7 +108,7 @@ def _pictures(data: BenchFolder, page: PageData, media: Path, written: set[str],
             best = highlighted.get(row["strategy"])
             if best is None or int(row["trial"]) < int(best["trial"]):
                 highlighted[row["strategy"]] = row
-        file = f"map-{name}.png"
+        file = f"map-{safe_stem(name)}.png"
         setup_map(layout, rows, data.strategies, page.colours, highlighted, media / file)
         page.maps[name] = file
         written.add(file)

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from cramlite.bench.specs import FIXED_ORDER
+from cramlite.bench.specs import FIXED_ORDER, trace_file
 from cramlite.errors import UserInputError
 
 #: Columns the report cannot do without; the others default to empty.
@@ -46,7 +46,10 @@ class BenchFolder:
         return sorted(self.setups)
 
     def trace(self, row: dict[str, Any]) -> Path | None:
-        path = self.path / "traces" / f"{row['setup']}-{row['strategy']}-{row['trial']}.jsonl"
+        """The trial's trace, if the bench wrote one (`bench --traces`)."""
+        folder = self.path / "traces"
+        path = Path(trace_file(folder, row["setup"], row.get("plan", ""), row["strategy"],
+                               row["trial"]))
         return path if path.is_file() and path.stat().st_size > 0 else None
 
 

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from cramlite.bench.specs import FIXED_ORDER
+from cramlite.safe_names import trial_stem
 
 #: A timeline shows the task tree down to this depth (0: the plan's top-level actions).
 MAX_DEPTH = 2
@@ -21,8 +22,9 @@ def ok(row: dict[str, Any]) -> bool:
 
 
 def trial_id(row: dict[str, Any]) -> str:
-    """A name for a trial usable in file names and anchors: SETUP-STRATEGY-TRIAL."""
-    return f"{row['setup']}-{row['strategy']}-{row['trial']}"
+    """A name for a trial usable in file names and anchors: a slug of its setup, plan,
+    strategy and index with a hash of them (see `cramlite.safe_names`)."""
+    return trial_stem(row["setup"], row.get("plan", ""), row["strategy"], row["trial"])
 
 
 def trials_of_interest(rows: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], int]:
