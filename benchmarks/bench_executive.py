@@ -26,26 +26,27 @@ import time
 
 import numpy as np
 
-from cramlite.designators import process_modules
+from cramlite.backends.pybullet import modules as process_modules
 from cramlite.motion import (
     BaseMotionPlanner,
     FootprintChecker,
     OccupancyMap,
     arm_ik,
     arm_planner,
-    collision,
     ik,
     trajectory,
 )
+from cramlite.scene import PlanningScene, collision
 from cramlite.trial import TrialRunner
-from cramlite.world import World, load_setup
+from cramlite.world import load_setup
 
 #: (label, owner, attribute): inclusive time of these calls, outermost call only.
 PARTS = [
     ("IK (Pinocchio)", ik.ArmIK, "solve"),
     ("arm planning (OMPL detours)", arm_planner.ArmMotionPlanner, "_ompl"),
-    ("collision checks outside OMPL", collision.CollisionScene, "is_free"),
-    ("collision checks outside OMPL", collision.CollisionScene, "states_free"),
+    ("collision checks outside OMPL", collision.MotionCheck, "is_free"),
+    ("collision checks outside OMPL", collision.MotionCheck, "states_free"),
+    ("scene observing the process modules", PlanningScene, "observe"),
     ("base planning (OMPL, 2D map)", BaseMotionPlanner, "plan"),
     ("trajectory timing (Ruckig)", trajectory, "time_joint_path"),
     ("executing trajectories", process_modules.SimulatedProcessModules,
@@ -139,8 +140,10 @@ def main() -> None:
     print(f"IK solve (reachable, random start): median {statistics.median(times) * 1e3:.2f} ms, "
           f"p90 {np.percentile(times, 90) * 1e3:.2f} ms, {failures}/300 unsolved (target < 5 ms)")
 
-    with World.from_setup(load_setup("v1")) as world:
-        planner = BaseMotionPlanner(FootprintChecker(OccupancyMap(world.environment_boxes())))
+    if True:  # (the v1 kitchen's 2D map)
+        scene = PlanningScene(load_setup("v1"))
+        planner = BaseMotionPlanner(FootprintChecker(OccupancyMap(
+            scene.environment_footprints())))
         queries = {"start -> island (blocked straight line)":
                    ((-0.5, -1.8, math.pi / 2), (-0.3, 1.4, math.pi)),
                    "counter -> island": ((0.80, -0.46, 0.0), (-0.3, 1.4, math.pi)),

@@ -1,4 +1,5 @@
-"""Benchmark: loading a setup (world + PR2 + items) headless. Target: median < 0.5 s.
+"""Benchmark: loading a setup headless: its planning scene (checked) and its PyBullet
+world (kitchen, PR2, items). Target: median < 0.5 s.
 
 Run: .venv/bin/python benchmarks/bench_load.py [--repeats 15]
 """
@@ -9,7 +10,10 @@ import argparse
 import statistics
 import time
 
-from cramlite.world import World, load_setup
+from cramlite.backends.pybullet.world import World
+from cramlite.scene import PlanningScene
+from cramlite.scene.validate import check_setup
+from cramlite.world import load_setup
 
 
 def main() -> None:
@@ -21,6 +25,7 @@ def main() -> None:
         for _ in range(args.repeats):
             start = time.perf_counter()
             setup = load_setup(name)
+            check_setup(PlanningScene(setup))
             world = World.from_setup(setup)
             times.append(time.perf_counter() - start)
             world.close()

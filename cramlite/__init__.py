@@ -1,8 +1,8 @@
 """cramlite: a lightweight, ROS-free robot plan executive in the style of PyCRAM.
 
 The public API is importable from here; names are loaded on first use, so that
-`from cramlite import make_strategy` does not import PyBullet (strategies and metrics
-stay free of it).
+`from cramlite import make_strategy` imports no simulator (strategies and metrics stay
+free of them).
 """
 
 from __future__ import annotations
@@ -13,8 +13,10 @@ from typing import Any
 __version__ = "0.1.0"
 
 _EXPORTS = {
-    # world
-    "World": "cramlite.world", "load_setup": "cramlite.world", "Setup": "cramlite.world",
+    # setups, the planning scene, backends
+    "load_setup": "cramlite.world", "Setup": "cramlite.world",
+    "PlanningScene": "cramlite.scene", "load_backend": "cramlite.backends",
+    "World": "cramlite.backends.pybullet.world",
     # designators and execution
     "simulated_robot": "cramlite.designators", "RobotContext": "cramlite.designators",
     "ObjectDesignatorDescription": "cramlite.designators",

@@ -1,8 +1,11 @@
-"""One trial: a setup, a plan and a strategy, run headless in a world; its measurements.
+"""One trial: a setup, a plan and a strategy, run headless on a backend; its measurements.
 
-A `TrialRunner` builds its world once and resets it between trials (cheap snapshot
-restore), which batch workers rely on. Every random choice follows the trial's seed:
-the motion layer and the strategy each get a generator derived from it.
+A `TrialRunner` loads the setup's planning scene (checked: an impossible setup is refused
+before any trial) and a backend's world once, and resets both between trials (cheap),
+which batch workers rely on. The plan plans on the scene and executes through the
+backend's process modules; the scene is updated from what they report. Every random
+choice follows the trial's seed: the motion layer and the strategy each get a generator
+derived from it.
 """
 
 from __future__ import annotations
@@ -15,15 +18,17 @@ from typing import Any
 
 import numpy as np
 
-from cramlite.designators import ExecutionOptions, RobotContext, SimulatedProcessModules
+from cramlite.backends import Backend, default_backend, load_backend
+from cramlite.designators import ExecutionOptions, RobotContext
 from cramlite.designators.tasks import time_in
 from cramlite.errors import SetupError
 from cramlite.plan_names import PLAN_NAMES  # noqa: F401  (re-exported)
 from cramlite.plans import PLANS
+from cramlite.scene.scene import PlanningScene
+from cramlite.scene.transforms import yaw_quat
+from cramlite.scene.validate import check_setup
 from cramlite.strategies import make_strategy
-from cramlite.world.bodies import yaw_quat
 from cramlite.world.setup import Setup, load_setup, resolve_setup_path
-from cramlite.world.world import World
 
 RESTING_TOLERANCE_M = 0.01
 
@@ -60,18 +65,24 @@ class TrialResult:
 
 
 class TrialRunner:
-    """Runs trials of one setup in one world, resetting it between trials."""
+    """Runs trials of one setup on one backend, resetting its world between trials."""
 
     def __init__(self, setup: Setup | str, gui: bool = False,
-                 options: ExecutionOptions | None = None):
+                 options: ExecutionOptions | None = None, backend: str | None = None):
         self.setup = setup if isinstance(setup, Setup) else load_setup(setup)
-        self.world = World.from_setup(self.setup, gui=gui)
+        self.scene = PlanningScene(self.setup)
+        check_setup(self.scene)
+        self.backend: Backend = load_backend(backend or default_backend(), self.setup, gui=gui)
         self.options = options or ExecutionOptions()
-        self.modules = SimulatedProcessModules(self.world)
-        self._initial = self.world.snapshot()
+        self.modules = self.backend.modules
+
+    @property
+    def world(self):
+        """The backend's own world (a PyBullet `World` for the pybullet backend)."""
+        return getattr(self.backend, "world", None)
 
     def close(self) -> None:
-        self.world.close()
+        self.backend.close()
 
     def __enter__(self) -> TrialRunner:
         return self
@@ -86,15 +97,14 @@ class TrialRunner:
         `trace`: write every executed state to this file (format cramlite-trace/1)."""
         if plan not in PLANS:
             raise ValueError(f"unknown plan {plan!r}; expected one of {', '.join(PLANS)}")
-        self.modules.release_all()
-        self.world.restore(self._initial)
-        if plan == "clear-table":
-            self._items_at_targets()
+        self.backend.reset(self._targets() if plan == "clear-table" else None)
+        self.scene.reset()
         chooser = make_strategy(strategy, params=params, dims=dims,
                                 rng=np.random.default_rng([seed, 1]),
                                 order=list(order or self.setup.baseline_order))
-        ctx = RobotContext(world=self.world, modules=self.modules,
+        ctx = RobotContext(scene=self.scene, modules=self.modules,
                            rng=np.random.default_rng([seed, 0]), options=self.options)
+        ctx.observe()  # (the scene's first belief: what the process modules report)
         if trace is not None:
             ctx.open_trace(trace, self.setup_reference(), plan, strategy, seed)
         try:
@@ -133,17 +143,17 @@ class TrialRunner:
             pass
         return str(self.setup.source.resolve())
 
-    def _items_at_targets(self) -> None:
-        for spec in self.setup.items:
-            self.world.objects[spec.name].set_pose(spec.target.xyz, yaw_quat(spec.target.yaw))
+    def _targets(self) -> dict[str, tuple]:
+        return {spec.name: (spec.target.xyz, yaw_quat(spec.target.yaw))
+                for spec in self.setup.items}
 
     def _check(self, plan: str) -> tuple[dict[str, dict[str, Any]], bool]:
         """Where each item ended; success = all at their goal and resting, and every
         drawer and door closed."""
         items, success = {}, True
-        counter = self.world.surface("counter")
+        counter = self.scene.surface("counter")
         for spec in self.setup.items:
-            (x, y, z), _ = self.world.objects[spec.name].pose()
+            (x, y, z), _ = self.modules.object_pose(spec.name)
             if plan != "clear-table":  # setting the table (or a user's plan): at the targets
                 off = math.dist((x, y), (spec.target.x, spec.target.y))
                 ok = off <= self.options.place_tolerance_m and \
@@ -161,7 +171,7 @@ class TrialRunner:
                 items[spec.name] = {"position": [round(x, 4), round(y, 4), round(z, 4)], "ok": ok}
             success &= ok
         # every drawer and door is closed again
-        success &= all(abs(v) < 1e-3 for v in self.world.world_joint_positions().values())
+        success &= all(abs(v) < 1e-3 for v in self.modules.world_joint_positions().values())
         return items, success
 
 

@@ -33,7 +33,7 @@ def item_candidate(ctx: RobotContext, setup: Setup, name: str,
     where the robot will stand to take it (`fetch_at`) and after delivering it
     (`then_at`)."""
     spec = setup.item(name)
-    (x, y, z), _ = ctx.modules.object_pose(name)
+    (x, y, z), _ = ctx.scene.object_pose(name)
     container = container_of(ctx, name)  # closed storage now: the OPM's c applies
     return Candidate(name=name, position=(x, y, z), category=spec.category,
                      contained=container is not None and not is_open(ctx, container),
@@ -56,7 +56,7 @@ def fetch_estimate(robot: tuple[float, float, float], item_xy: tuple[float, floa
 
 
 def robot_position(ctx: RobotContext) -> tuple[float, float, float]:
-    x, y, _ = ctx.modules.base_pose()
+    x, y, _ = ctx.scene.base
     return (x, y, 0.0)
 
 
@@ -76,7 +76,7 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
     def then_at(name: str) -> tuple[float, float, float]:
         goal = goals[name].get("target") or goals[name].get("preferred")
         if goal is None:  # somewhere on a surface: its middle
-            surf = ctx.world.surface(goals[name]["surface"])
+            surf = ctx.scene.surface(goals[name]["surface"])
             goal = ((surf.x_min + surf.x_max) / 2, (surf.y_min + surf.y_max) / 2)
         return (goal[0], goal[1], 0.0)
 
@@ -95,7 +95,7 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
         except PlanFailure as failure:
             ctx.note(f"failed: {failure}")
             report.failures.append(failure)
-        (x, y, _), _ = ctx.modules.object_pose(chosen.name)
+        (x, y, _), _ = ctx.scene.object_pose(chosen.name)
         report.add_leg(here[:2], chosen.position[:2], (x, y))
     for step in [*(CloseAction(name) for name in list(ctx.opened)), ParkArmsAction()]:
         try:  # whatever it opened is closed again, and the arms are tucked

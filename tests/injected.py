@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from cramlite.designators import NavigationFailed, SimulatedProcessModules
+from cramlite.backends.pybullet.modules import SimulatedProcessModules
+from cramlite.designators import NavigationFailed
 from cramlite.designators.failures import ContainerManipulationFailed
 
 

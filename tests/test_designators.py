@@ -1,4 +1,5 @@
-"""Each designator type in a real PyBullet world, fall-through, and the plan language."""
+"""Each designator type executing in a real PyBullet world (planned on the planning
+scene, which observes it), fall-through, and the plan language."""
 
 from __future__ import annotations
 
@@ -7,6 +8,8 @@ import math
 import numpy as np
 import pytest
 
+from cramlite.backends.pybullet.client import p
+from cramlite.backends.pybullet.world import World
 from cramlite.designators import (
     CostmapLocation,
     MoveTorsoAction,
@@ -28,8 +31,7 @@ from cramlite.designators import (
 from cramlite.designators.grasps import grasp_height_m
 from cramlite.designators.motions import AttachMotion, MoveArmJointsMotion
 from cramlite.motion.ik import arm_ik, tool_frame
-from cramlite.world import World, load_setup
-from cramlite.world.bullet import p
+from cramlite.world import load_setup
 from tests.injected import NavigationFailsOnce
 
 
@@ -56,6 +58,7 @@ def test_costmap_location_offers_checked_reachable_poses(world) -> None:
         MoveTorsoAction(0.25).perform(ctx)
         # the cup right beside the milk: many arms that reach the milk would hit the cup
         world.objects["cup"].set_pose((1.45, -0.04, 0.85))
+        ctx.observe()  # (the scene learns where it is now)
         position, orientation = world.objects["milk"].pose()
         location = CostmapLocation(position, {"front": grasp_height_m("front", 0.2)}, "milk",
                                    orientation=orientation)
@@ -127,6 +130,7 @@ def test_motions_move_attached_objects_with_the_gripper(world) -> None:
     with simulated_robot(world) as ctx:
         ParkArmsAction().perform(ctx)
         world.robot.set_base_pose(0.5, 0.85 + 0.188, 0.0)
+        ctx.observe()
         AttachMotion("right", "cup").perform(ctx)
         before = np.array(world.objects["cup"].position())
         tool_before = np.array(world.robot.link_pose(tool_frame("right"))[0])
@@ -147,6 +151,7 @@ def test_move_tcp_motion_reaches_a_pose_or_fails_typed(world) -> None:
 
     with simulated_robot(world) as ctx:
         world.robot.set_base_pose(0.0, 0.0, 0.0)
+        ctx.observe()
         ParkArmsAction().perform(ctx)
         target = pin.SE3(np.eye(3), np.array([0.6, -0.2, 1.0]))
         MoveTCPMotion("right", target).perform(ctx)
@@ -196,6 +201,7 @@ def test_transport_falls_through_to_the_next_candidate(world) -> None:
 def test_transport_failure_says_what_was_tried(world) -> None:
     with simulated_robot(world) as ctx:
         world.objects["milk"].set_pose((1.8, -0.15, 0.85))  # back of the counter
+        ctx.observe()
         with pytest.raises(ObjectUnreachable) as info:
             TransportAction("milk", target=(-0.85, 1.6, 0.86)).perform(ctx)
         failure = info.value

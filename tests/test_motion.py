@@ -9,7 +9,8 @@ import pinocchio as pin
 import pytest
 
 from cramlite.motion import BaseMotionPlanner, FootprintChecker, OccupancyMap, arm_ik
-from cramlite.world import World, load_setup
+from cramlite.scene import PlanningScene
+from cramlite.world import load_setup
 
 
 @pytest.mark.parametrize("arm", ["right", "left"])
@@ -87,9 +88,9 @@ def test_torso_preference_keeps_the_torso_up() -> None:
 
 @pytest.fixture(scope="module")
 def planner():
-    with World.from_setup(load_setup("v1")) as world:
-        checker = FootprintChecker(OccupancyMap(world.environment_boxes()))
-        yield BaseMotionPlanner(checker), checker
+    scene = PlanningScene(load_setup("v1"))
+    checker = FootprintChecker(OccupancyMap(scene.environment_footprints()))
+    yield BaseMotionPlanner(checker), checker
 
 
 def test_ompl_plans_around_the_island(planner) -> None:

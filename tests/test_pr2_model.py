@@ -1,13 +1,25 @@
-"""The PR2 in PyBullet and Pinocchio agree once joints are mapped by name."""
+"""The planning scene's models against PyBullet's: the PR2's frames, the distances of
+primitive shapes, the contacts of meshes."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import coal
 import numpy as np
-import pinocchio as pin
 import pytest
 
-from cramlite.world import World
-from cramlite.world.pr2 import JointMap, pinocchio_pr2, pr2_urdf_path
+from cramlite.backends.pybullet.client import p
+from cramlite.backends.pybullet.world import World
+from cramlite.motion.ik import arm_joint_names
+from cramlite.scene.collision import SceneCollisions
+from cramlite.scene.kinematics import BatchedFrames
+from cramlite.scene.models import MESH, pr2_model
+from cramlite.scene.scene import PlanningScene
+from cramlite.scene.transforms import planar, pose_matrix, quat_matrix
+from cramlite.trace.check import _Body, penetration
+from cramlite.world import load_setup
+from cramlite.world.pr2 import pr2_urdf_path
 
 
 def test_urdf_mesh_paths_are_resolved_to_the_installed_share_folder() -> None:
@@ -15,74 +27,182 @@ def test_urdf_mesh_paths_are_resolved_to_the_installed_share_folder() -> None:
     assert "package://" not in text
     mesh = text.split('filename="')[1].split('"')[0]
     assert mesh.startswith("/") and mesh.endswith(".stl")
-    from pathlib import Path
     assert Path(mesh).is_file()
 
 
-def test_pinocchio_model_is_built_once() -> None:
-    assert pinocchio_pr2() is pinocchio_pr2()
+def test_the_model_is_built_once_with_its_meshes_srdf_and_mimic_joints() -> None:
+    robot = pr2_model()
+    assert pr2_model() is robot
+    assert sum(len(s) for s in robot.shapes_by_link.values()) == 32
+    assert sum(s.kind == MESH for s in robot.shapes) == 31  # (the stereo camera: a box)
+    assert len(robot.disabled_pairs) == 1161  # (the SRDF's 1163 entries name two pairs twice)
+    links = sorted(robot.shapes_by_link)
+    pairs = [(a, b) for i, a in enumerate(links) for b in links[i + 1:]
+             if robot.may_collide(a, b)]
+    assert len(pairs) == 239  # as pinocchio.removeCollisionPairs leaves them
+    fingers = robot.with_mimics({"r_gripper_l_finger_joint": 0.3})
+    assert {k for k in fingers if k.startswith("r_gripper")} == {
+        "r_gripper_l_finger_joint", "r_gripper_r_finger_joint", "r_gripper_l_finger_tip_joint",
+        "r_gripper_r_finger_tip_joint", "r_gripper_l_parallel_root_joint",
+        "r_gripper_r_parallel_root_joint"}
+
+
+def _random_joints(rng: np.random.Generator) -> dict[str, float]:
+    out = {}
+    for name, joint in pr2_model().joints.items():
+        lo, hi = (joint.lower, joint.upper) if joint.kind != "continuous" else (-np.pi, np.pi)
+        out[name] = float(rng.uniform(lo, hi))
+    return out
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_joint_map_gives_the_same_forward_kinematics(seed: int) -> None:
+def test_link_frames_agree_with_pybullet(seed: int) -> None:
+    """Every link's frame from the scene's model (Pinocchio) is PyBullet's, to 1e-5 m, at a
+    turned, moved base and random joints."""
     rng = np.random.default_rng(seed)
-    pr2 = pinocchio_pr2()
-    with World() as world:
-        robot = world.load_robot()
-        joints = {}
-        for name, (lo, hi) in robot.joint_limits.items():
-            if hi < lo:  # continuous joint (PyBullet reports lower 0, upper -1)
-                lo, hi = -np.pi, np.pi
-            joints[name] = float(rng.uniform(lo, hi))
-        robot.set_joint_positions(joints)
-        jmap = JointMap(robot.joint_index, pr2)
-        q = jmap.bullet_to_q(joints)
-        back = jmap.q_to_bullet(q)
-        for name, value in back.items():
-            assert np.isclose(np.angle(np.exp(1j * (value - joints[name]))), 0, atol=1e-9), name
-        data = pr2.model.createData()
-        pin.framesForwardKinematics(pr2.model, data, q)
-        for link in ["r_gripper_tool_frame", "l_gripper_tool_frame", "head_plate_frame",
-                     "r_elbow_flex_link"]:
-            frame = data.oMf[pr2.model.getFrameId(link)]
-            pos, _ = robot.link_pose(link)
-            print(link, frame.translation.round(4), np.round(pos, 4))
-            assert np.allclose(frame.translation, pos, atol=1e-5)
+    scene = PlanningScene(load_setup("v1"))
+    joints = _random_joints(rng)
+    base = (0.4, -0.7, 2.2)
+    with World.from_setup(scene.setup) as world:
+        world.robot.set_base_pose(*base)
+        world.robot.set_joint_positions({n: v for n, v in joints.items()
+                                         if n in world.robot.joint_index})
+        links = [n for n in world.robot.link_index if n in scene.robot.link_frames]
+        mine = scene.link_matrices(links, joints, base)
+        for link in links:
+            pos, orn = world.robot.link_pose(link)
+            assert np.allclose(mine[link][:3, 3], pos, atol=1e-5), link
+            assert np.allclose(mine[link][:3, :3], quat_matrix(orn), atol=1e-5), link
 
 
 @pytest.mark.parametrize("arm, torso", [("right", True), ("left", True), ("right", False)])
-def test_link_frames_by_pinocchio_are_pybullets(arm: str, torso: bool) -> None:
-    """The motion broadphase takes every link's frame from Pinocchio (the chain composed
-    for all states at once): at a turned, moved base, with the other joints anywhere, they
-    must be PyBullet's frames, whether the torso moves with the arm or not."""
-    from cramlite.designators.context import collision_checker
-    from cramlite.motion.ik import arm_joint_names
-    from cramlite.world import load_setup
-    from cramlite.world.bullet import p
-
+def test_batched_frames_are_the_models(arm: str, torso: bool) -> None:
+    """A motion's frames, for many states at once (the chain composed over all of them)
+    and for a few (state by state), are the model's own."""
     rng = np.random.default_rng(3)
-    with World.from_setup(load_setup("v1")) as world:
-        robot = world.robot
-        robot.set_base_pose(0.4, -0.7, 2.2)
-        robot.set_joint_positions({"l_elbow_flex_joint": -1.0, "torso_lift_joint": 0.2,
-                                   "r_gripper_l_finger_joint": 0.3})
-        checker = collision_checker(world)
-        names = ["torso_lift_joint"] * torso + arm_joint_names(arm)
-        scene = checker.scene(names, [])
-        states = rng.uniform(-4.0, 4.0, size=(12, len(names)))
-        if torso:
-            states[:, 0] = rng.uniform(0.0, 0.3, 12)
-        positions, rotations = checker.link_frames().frames(names, states, scene.query_links)
-        assert positions.shape == (12, len(scene.query_links), 3)
-        # (a few states are placed one by one, many all at once: both must agree)
-        few = checker.link_frames().frames(names, states[:3], scene.query_links)
-        assert np.allclose(few[0], positions[:3]) and np.allclose(few[1], rotations[:3])
-        for s, q in enumerate(states):
-            scene.set_state(q)
-            bullet = p.getLinkStates(robot.body, scene.query_links,
-                                     computeForwardKinematics=True,
-                                     physicsClientId=world.client)
-            for k, state in enumerate(bullet):
-                assert np.allclose(positions[s, k], state[4], atol=1e-5)
-                matrix = np.array(p.getMatrixFromQuaternion(state[5])).reshape(3, 3)
-                assert np.allclose(rotations[s, k], matrix, atol=1e-5)
+    robot = pr2_model()
+    frames = BatchedFrames(robot)
+    values = _random_joints(rng)
+    names = ["torso_lift_joint"] * torso + arm_joint_names(arm)
+    links = [link for link in robot.shapes_by_link if set(names) & set(robot.joints_above(link))]
+    states = rng.uniform(-4.0, 4.0, size=(12, len(names)))
+    if torso:
+        states[:, 0] = rng.uniform(0.0, 0.3, 12)
+    base = planar(0.4, -0.7, 2.2)
+    many = frames.frames(base, values, names, states, links)
+    few = frames.frames(base, values, names, states[:3], links)
+    assert np.allclose(few, many[:3])
+    for s, row in enumerate(states):
+        placed = robot.link_placements({**values, **dict(zip(names, row, strict=True))}, links)
+        for k, link in enumerate(links):
+            assert np.allclose(many[s, k], base @ placed[link], atol=1e-9)
+
+
+def test_primitive_distances_agree_with_pybullet() -> None:
+    """An item against the kitchen's boxes at random poses near them: the scene's
+    penetration depth (coal) is PyBullet's within 1 mm."""
+    setup = load_setup("v1")
+    scene = PlanningScene(setup)
+    collisions = SceneCollisions(scene)
+    rng = np.random.default_rng(5)
+    compared = 0
+    with World.from_setup(setup) as world:
+        kitchen = [(s, pl) for s, pl in scene.kitchen_shapes() if s.link in ("counter", "island")]
+        for name in ("cup", "milk", "breakfast-cereal"):
+            body = world.objects[name]
+            for _ in range(40):
+                shape, placement = kitchen[int(rng.integers(len(kitchen)))]
+                top = placement[:3, 3] + shape.centre + [0, 0, shape.half[2]]
+                position = top + rng.uniform([-0.3, -0.3, -0.06], [0.3, 0.3, 0.02])
+                yaw = float(rng.uniform(-np.pi, np.pi))
+                orientation = (0.0, 0.0, np.sin(yaw / 2), np.cos(yaw / 2))
+                body.set_pose(tuple(position), orientation)
+                (item_shape, item_placement), = scene.item_shapes(
+                    name, pose_matrix(position, orientation))
+                mine = collisions.depth(item_shape, item_placement, shape, placement)
+                index = world.environment_links[shape.link]
+                points = p.getClosestPoints(body.body, world.environment, 0.0,
+                                            linkIndexB=index, physicsClientId=world.client)
+                theirs = max((-pt[8] for pt in points), default=0.0)
+                if max(mine, theirs) > 0:
+                    compared += 1
+                assert mine == pytest.approx(theirs, abs=1e-3), (name, shape.link)
+    assert compared > 20
+
+
+def test_mesh_contacts_agree_with_pybullets_hulls_and_the_real_meshes() -> None:
+    """Robot links near the kitchen at random configurations: every contact the scene
+    reports deeper than 1 cm is one in PyBullet's convex hulls too, and every hull contact
+    deeper than 1 cm that the real meshes confirm (the trace check's volumetric test) is
+    reported by the scene."""
+    setup = load_setup("v1")
+    scene = PlanningScene(setup)
+    collisions = SceneCollisions(scene)
+    rng = np.random.default_rng(11)
+    checker_bodies = {}
+    seen = {"scene": 0, "hulls": 0}
+    with World.from_setup(setup) as world:
+        kitchen = {s.link: (s, pl) for s, pl in scene.kitchen_shapes()}
+        for _ in range(150):
+            joints = _random_joints(rng)
+            base = (float(rng.uniform(0.75, 0.95)), float(rng.uniform(-0.6, 0.8)),
+                    float(rng.uniform(-0.4, 0.4)))
+            world.robot.set_base_pose(*base)
+            world.robot.set_joint_positions({n: v for n, v in joints.items()
+                                             if n in world.robot.joint_index})
+            frames = scene.link_matrices(list(scene.robot.shapes_by_link), joints, base)
+            for link in ("counter", "counter_body"):
+                shape, placement = kitchen[link]
+                index = world.environment_links[link]
+                for robot_link, shapes in scene.robot.shapes_by_link.items():
+                    robot_shape = shapes[0]
+                    placed = frames[robot_link] @ robot_shape.in_link
+                    mine = collisions.depth(robot_shape, placed, shape, placement)
+                    points = p.getClosestPoints(
+                        world.robot.body, world.environment, 0.0,
+                        linkIndexA=world.robot.link_index[robot_link], linkIndexB=index,
+                        physicsClientId=world.client)
+                    hull = max((-pt[8] for pt in points), default=0.0)
+                    if mine > 0.01:
+                        seen["scene"] += 1
+                        assert hull > 0, (robot_link, link, mine)
+                    if hull > 0.01:
+                        key = id(robot_shape)
+                        body = checker_bodies.setdefault(key, _Body(robot_link, "robot",
+                                                                    robot_link, robot_shape))
+                        other = checker_bodies.setdefault(id(shape), _Body(link, "kitchen",
+                                                                           link, shape))
+                        real = penetration(body, placed, other, placement,
+                                           np.full(3, -50.0), np.full(3, 50.0), 0.0)
+                        if real > 0.01:
+                            seen["hulls"] += 1
+                            assert mine > 0.005, (robot_link, link, hull, real, mine)
+    print(seen)
+    assert seen["scene"] > 10 and seen["hulls"] > 10
+
+
+def test_coal_sees_no_mesh_inside_a_mesh_and_the_scene_does() -> None:
+    """coal's test sees surfaces that cross: a fingertip wholly inside the other arm's
+    shoulder housing crosses none. The scene's check sees it (and the trace check)."""
+    robot = pr2_model()
+    scene = PlanningScene(load_setup("v1"))
+    collisions = SceneCollisions(scene)
+    shoulder = robot.shapes_by_link["r_shoulder_pan_link"][0]
+    tip = robot.shapes_by_link["l_gripper_l_finger_tip_link"][0]
+    inside = np.eye(4)
+    inside[:3, 3] = [-0.03, 0.0, -0.02]  # 9 cm deep in the housing (where the fingertip's
+    # frame is: the tip itself reaches at most 6 cm from it)
+    result = coal.CollisionResult()
+    coal.collide(shoulder.geometry, coal.Transform3s(), tip.geometry,
+                 coal.Transform3s(inside[:3, :3], inside[:3, 3]), coal.CollisionRequest(),
+                 result)
+    assert not result.isCollision()  # (what the scene must not rely on)
+    assert collisions.enclosed(shoulder, np.eye(4), tip, inside)
+    assert collisions.depth(shoulder, np.eye(4), tip, inside) > 0.05
+    real = penetration(_Body("s", "robot", "s", shoulder), np.eye(4),
+                       _Body("t", "robot", "t", tip), inside, np.full(3, -1.0), np.full(3, 1.0),
+                       0.01)
+    assert real > 0.05
+    away = np.eye(4)
+    away[:3, 3] = shoulder.centre + [0.6, 0.0, 0.0]
+    assert not collisions.enclosed(shoulder, np.eye(4), tip, away)

@@ -232,7 +232,7 @@ def test_show_top_draws_the_labelled_map(tmp_path) -> None:
 
 
 def test_labels_are_spread_and_points_project_onto_the_image() -> None:
-    from cramlite.world.render import DEFAULT_CAMERA, project
+    from cramlite.backends.pybullet.render import DEFAULT_CAMERA, project
     from cramlite.world.topdown import spread
 
     placed = spread([1.0, 1.01, 1.02, 3.0, 0.99], 0.2, 0.0, 5.0)

@@ -113,8 +113,8 @@ START = "start: [-0.5, -1.8, 1.5708]"
     # the robot: outside the kitchen, inside furniture, on an item, unknown keys
     (START, "start: [10.0, 0.0, 0.0]", ("robot.start", "not on the floor of the kitchen")),
     (START, "start: [-2.4, 0.0, 0.0]", ("robot.start", "not on the floor")),
-    (START, "start: [1.55, 0.2, 0.0]", ("robot.start", "inside 'counter'")),
-    (START, "start: [1.9, -0.5, 0.0]", ("robot.start", "inside 'wall_back'")),
+    (START, "start: [1.55, 0.2, 0.0]", ("robot.start", "inside 'counter_base'")),
+    (START, "start: [1.9, -0.5, 0.0]", ("robot.start", "inside 'counter_base'")),  # (deepest)
     (START, START + "\n  speed: 2", ("robot.speed", "unknown key; expected only ['start']")),
     # numbers: 400 digits, NaN, infinity, a yaw of many turns
     (SPOON_POSE, "pose: [" + "1" * 400 + ", 0.35, 0.85, 0.0]",

@@ -10,14 +10,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cramlite.backends.pybullet.client import p
+from cramlite.backends.pybullet.world import World
 from cramlite.designators import MoveTorsoAction, ParkArmsAction, simulated_robot
 from cramlite.designators.failures import PlanFailure
 from cramlite.designators.storage import CloseAction, OpenAction
 from cramlite.trace import read_trace
 from cramlite.trace.replay import penetrations
 from cramlite.trial import TrialRunner
-from cramlite.world import World, load_setup
-from cramlite.world.bullet import p
+from cramlite.world import load_setup
 from tests.conftest import run_cli
 from tests.injected import HandlesNeedBothHandsFree, NavigationFailsOnce
 
@@ -31,8 +32,8 @@ def c2_world():
 def _handle_offsets(world: World, trace) -> list[float]:
     """How far the gripper's tool frame is from the handle's grasp point in every state
     where the container moves (from the trace, replayed in the world)."""
+    from cramlite.backends.pybullet.replay import apply_state
     from cramlite.designators.storage import _grasp_pose
-    from cramlite.trace.replay import apply_state
 
     joints, world_joints = trace.header["joints"], trace.header["world_joints"]
     out = []
@@ -78,11 +79,11 @@ def test_open_and_close_each_container(c2_world, tmp_path: Path) -> None:
         assert [n.status for n in opened] == ["succeeded"] * 6
         assert all(n.end_s - n.start_s > 1.0 for n in opened)  # it takes robot time
     recorded = read_trace(trace)
-    assert recorded.header["world_joints"] == list(world.world_joints)
+    assert recorded.header["world_joints"] == list(world.world_joints)  # (the URDF's order)
     offsets = _handle_offsets(world, recorded)
     print("tool to handle while it moves: max", max(offsets))
     assert len(offsets) > 50 and max(offsets) < 0.02  # the arm stays on the handle's path
-    found = penetrations(recorded, world=world)
+    found = penetrations(recorded)
     world.set_world_joints(dict.fromkeys(world.world_joints, 0.0))
     assert found == [], [f.describe() for f in found]
 
@@ -236,22 +237,27 @@ def test_an_open_door_is_drawn_on_the_map_by_its_outline_not_its_bounds() -> Non
     """A door swung open 2.3 rad spans a 44 x 39 cm square of axis-aligned bounds but is a
     2 cm plate: the base planner's map blocks the plate (and its margin) only."""
     from cramlite.designators.context import occupancy_map
+    from cramlite.scene import PlanningScene
 
-    with World.from_setup(load_setup("c1")) as world:
-        world.set_world_joint("cupboard_door_joint", 2.3)
-        door = world.environment_links["cupboard_door"]
-        (plate,) = world.link_outlines(door)
-        lo, hi = world.link_bounds(door)
-        grid = occupancy_map(world)
-        middle = plate.mean(axis=0)
-        assert grid.blocked_at(np.array([middle]))[0]
-        corners = np.array([[x, y] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])])
-        # the corner of the bounds farthest from the plate, 5 cm in
-        far = max(corners, key=lambda c: np.linalg.norm(plate - c, axis=1).min())
-        inward = np.sign(middle - far) * 0.05
-        assert not grid.blocked_at(np.array([far + inward]))[0]
-        world.set_world_joint("cupboard_door_joint", 0.0)
-        assert world.link_outlines(door) is None  # closed: square to the axes
+    scene = PlanningScene(load_setup("c1"))
+
+    def door_outlines():
+        return next(o for name, _, _, o in scene.environment_footprints()
+                    if name == "cupboard_door")
+
+    scene.set_world_joint("cupboard_door_joint", 2.3)
+    (plate,) = door_outlines()
+    lo, hi = scene.link_bounds("cupboard_door")
+    grid = occupancy_map(scene)
+    middle = plate.mean(axis=0)
+    assert grid.blocked_at(np.array([middle]))[0]
+    corners = np.array([[x, y] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])])
+    # the corner of the bounds farthest from the plate, 5 cm in
+    far = max(corners, key=lambda c: np.linalg.norm(plate - c, axis=1).min())
+    inward = np.sign(middle - far) * 0.05
+    assert not grid.blocked_at(np.array([far + inward]))[0]
+    scene.set_world_joint("cupboard_door_joint", 0.0)
+    assert door_outlines() is None  # closed: square to the axes
 
 
 def test_a_container_the_free_hand_cannot_open_is_opened_with_both_hands_free() -> None:

@@ -101,7 +101,8 @@ def test_replay_check_finds_the_robot_inside_the_island(tmp_path: Path) -> None:
     result = run_cli("replay", str(inside), "--check")
     print(result.stdout)
     assert result.returncode == 1
-    assert "base_link 56.5 cm inside island at t = 1.00 s (line 3)" in result.stdout
+    # (depth: how far its deepest point is inside, 34.6 cm below the top and in from the sides)
+    assert "base_link 34.6 cm inside island at t = 1.00 s (line 3)" in result.stdout
     clear = write(tmp_path / "clear.jsonl", [(0.0, [-0.2, -1.8, math.pi / 2]),
                                              (1.0, [-0.2, -1.0, math.pi / 2])])
     result = run_cli("replay", str(clear), "--check")

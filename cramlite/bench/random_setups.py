@@ -89,7 +89,8 @@ def random_setup_data(rng: np.random.Generator, name: str) -> dict[str, Any]:
 
 def generate_setups(count: int, seed: int, folder: Path) -> dict[str, Path]:
     """`count` validated random setups written to `folder` (name -> path)."""
-    from cramlite.world.world import World
+    from cramlite.scene.scene import PlanningScene
+    from cramlite.scene.validate import check_setup
 
     folder.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng([seed, 0x5E7])
@@ -102,8 +103,7 @@ def generate_setups(count: int, seed: int, folder: Path) -> dict[str, Path]:
         path.write_text(yaml.safe_dump(random_setup_data(rng, name), sort_keys=False,
                                        default_flow_style=None))
         try:
-            with World.from_setup(load_setup(path)):
-                pass
+            check_setup(PlanningScene(load_setup(path)))
         except SetupError:
             path.unlink()
             continue

@@ -51,8 +51,9 @@ def _strategies(text: str) -> list[str]:
 def _setups(text: str) -> dict:
     """Load and check every setup now (geometry included), so a bad one is refused before
     any trial runs."""
+    from cramlite.scene.scene import PlanningScene
+    from cramlite.scene.validate import check_setup
     from cramlite.world.setup import builtin_setup_names, load_setup
-    from cramlite.world.world import World
 
     setups = {}
     for name in comma_list(text):
@@ -66,8 +67,7 @@ def _setups(text: str) -> dict:
             raise
         if setup.name in setups:
             raise UserInputError(f"two setups are named {setup.name!r}", field="--setups")
-        with World.from_setup(setup):
-            pass
+        check_setup(PlanningScene(setup))
         setups[setup.name] = setup
     return setups
 

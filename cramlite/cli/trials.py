@@ -24,7 +24,7 @@ MAX_IMAGE_SIDE = 4096
 
 
 def _save_image(image, path: str, option: str) -> str:
-    from cramlite.world.render import save_png
+    from cramlite.backends.pybullet.render import save_png
 
     try:
         return str(save_png(image, path))
@@ -35,12 +35,16 @@ def _save_image(image, path: str, option: str) -> str:
 
 
 def cmd_show(args: argparse.Namespace) -> int:
-    from cramlite.world import World, load_setup
+    from cramlite.scene.scene import PlanningScene
+    from cramlite.scene.validate import check_setup
+    from cramlite.world import load_setup
 
     setup = load_setup(args.setup)
+    check_setup(PlanningScene(setup))
     if args.top:
         return _show_top(setup, args)
-    from cramlite.world.render import render_labelled
+    from cramlite.backends.pybullet.render import render_labelled
+    from cramlite.backends.pybullet.world import World
 
     out = args.out or f"{setup.name}.png"
     with World.from_setup(setup) as world:
@@ -97,7 +101,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         except StrategyError as exc:  # e.g. optimal with too many items, a broken plugin
             raise UserInputError(str(exc), field="--strategy") from None
         if args.image:
-            from cramlite.world.render import render
+            from cramlite.backends.pybullet.render import render
 
             _save_image(render(runner.world), args.image, "--image")
     if args.json:

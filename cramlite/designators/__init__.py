@@ -1,5 +1,7 @@
-"""Designators (object, location, action, motion), process modules and the plan language."""
+"""Designators (object, location, action, motion) and the plan language; the process
+modules they command are the backends' (`cramlite.backends`)."""
 
+from cramlite.backends.base import ProcessModules
 from cramlite.designators.actions import (
     MoveTorsoAction,
     NavigateAction,
@@ -32,7 +34,6 @@ from cramlite.designators.motions import (
     MoveTorsoMotion,
 )
 from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription
-from cramlite.designators.process_modules import ProcessModules, SimulatedProcessModules
 
 __all__ = [
     "AttachMotion", "CostmapLocation", "DetachMotion", "ExecutionOptions", "GraspFailed",
@@ -42,6 +43,6 @@ __all__ = [
     "MoveTorsoMotion", "NavigateAction", "NavigationFailed", "NoPathFound", "ObjectDesignator",
     "ObjectDesignatorDescription", "ObjectNotFound", "ObjectUnreachable", "ParkArmsAction",
     "PickUpAction", "PlaceAction", "PlacementFailed", "PlacingLocation", "PlanFailure",
-    "ProcessModules", "ReachablePose", "RobotContext", "Sequential", "SimulatedProcessModules",
+    "ProcessModules", "ReachablePose", "RobotContext", "Sequential",
     "TransportAction", "TryInOrder", "simulated_robot",
 ]

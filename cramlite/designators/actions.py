@@ -51,8 +51,8 @@ from cramlite.designators.tasks import recorded
 from cramlite.motion.ik import ARMS
 from cramlite.motion.trajectory import wrap_angle
 from cramlite.process_cache import ProcessCache
-from cramlite.world.bodies import quat_yaw
-from cramlite.world.bullet import p
+from cramlite.scene.robot_points import upper_body_parts, upper_body_points
+from cramlite.scene.transforms import quat_yaw
 from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT
 
 BasePose = tuple[float, float, float]
@@ -78,10 +78,10 @@ class ParkArmsAction:
             target = dict(PARK_JOINTS[arm])
             holding = ctx.holding.get(arm)
             if holding is not None:
-                torso = ctx.modules.joint_positions([TORSO_JOINT])[TORSO_JOINT]
+                torso = ctx.scene.joint_positions([TORSO_JOINT])[TORSO_JOINT]
                 carry = carry_joints(ctx, arm, holding.grasp, holding.grasp_height_m, torso)
                 target = carry or target
-            now = ctx.modules.joint_positions(list(target))
+            now = ctx.scene.joint_positions(list(target))
             if any(abs(wrap_angle(now[n] - v)) > PARKED_TOLERANCE_RAD for n, v in target.items()):
                 MoveArmJointsMotion(dict(target)).perform(ctx)
 
@@ -104,7 +104,7 @@ class NavigateAction:
     @recorded
     def perform(self, ctx: RobotContext) -> None:
         ctx.base_checker()  # up to date with what sticks out of the base
-        start = ctx.modules.base_pose()
+        start = ctx.scene.base
         path = ctx.base_planner.plan(start, self.target, ctx.rng)
         if path is None:
             x, y, yaw = self.target
@@ -141,7 +141,7 @@ class PickUpAction:
         MoveArmJointsMotion(reach.joints, touch).perform(ctx)
         (bx, by, bz), orientation = obj.pose(ctx)
         height = obj.height_m(ctx)
-        tool = ctx.modules.tool_pose(reach.arm)
+        tool = ctx.scene.tool_pose(reach.arm)  # (the measured joints' forward kinematics)
         expected = (bx, by, bz + grasp_height_m(reach.grasp, height))
         if math.dist(tool[0], expected) > GRASP_CHECK_M:
             MoveArmJointsMotion(reach.pre_joints, touch).perform(ctx)
@@ -151,7 +151,7 @@ class PickUpAction:
         AttachMotion(reach.arm, obj.name).perform(ctx)
         ctx.holding[reach.arm] = Holding(
             obj.name, reach.grasp, grasp_height_m(reach.grasp, height),
-            yaw_offset=quat_yaw(orientation) - ctx.modules.base_pose()[2],
+            yaw_offset=quat_yaw(orientation) - ctx.scene.base[2],
             relative=relative_pose(_se3(tool), (bx, by, bz), orientation))
         try:
             MoveArmJointsMotion(reach.post_joints).perform(ctx)  # lift
@@ -175,7 +175,7 @@ class PickUpAction:
     def _resolve(self, ctx: RobotContext, obj: ObjectDesignator) -> ReachablePose:
         (x, y, z), orientation = obj.pose(ctx)
         height = obj.height_m(ctx)
-        base = ctx.modules.base_pose()
+        base = ctx.scene.base
         tried = []
         for arm in self.arms or [a for a in ARMS if a not in ctx.holding]:
             for grasp in self.grasps or grasps_for(height):
@@ -212,7 +212,7 @@ class PlaceAction:
         MoveGripperMotion(arm, "open", touch).perform(ctx)
         DetachMotion(arm, obj.name).perform(ctx)
         del ctx.holding[arm]
-        ctx.modules.settle(ctx.options.settle_s, [obj.name])
+        ctx.settle([obj.name])
         ctx.record_state()
         MoveArmJointsMotion(reach.post_joints, touch).perform(ctx)  # retreat
         ParkArmsAction(arm).perform(ctx)
@@ -226,7 +226,7 @@ class PlaceAction:
     def _resolve(self, ctx: RobotContext, arm: str, holding: Holding) -> ReachablePose:
         location = CostmapLocation(self.target, {holding.grasp: holding.grasp_height_m},
                                    holding.obj, [arm], PLACE, relative=holding.relative)
-        reach = location.reach_from(ctx, ctx.modules.base_pose(), arm, holding.grasp)
+        reach = location.reach_from(ctx, ctx.scene.base, arm, holding.grasp)
         if reach is None:
             raise ObjectUnreachable("cannot reach the place pose from here", obj=holding.obj)
         return reach
@@ -441,7 +441,7 @@ class TransportAction:
             if arm in ctx.holding:
                 DetachMotion(arm, obj.name).perform(ctx)
                 del ctx.holding[arm]
-                ctx.modules.settle(ctx.options.settle_s, [obj.name])
+                ctx.settle([obj.name])
                 ctx.note(f"let go of {obj.name}")
         ctx.footprint_stale = True
 
@@ -459,9 +459,9 @@ def _closed_now(ctx: RobotContext, close, container) -> bool:
 
 
 def _at(ctx: RobotContext, container, local: Vec3) -> Vec3:
-    """A point given in a container's inside frame, in the world as it stands now."""
-    return tuple(p.multiplyTransforms(*ctx.world.link_frame(container.inside_link), local,
-                                      (0, 0, 0, 1))[0])
+    """A point given in a container's inside frame, in the world as it is believed to
+    stand now."""
+    return ctx.scene.inside_point(container, local)
 
 
 def _grasps_in(ctx: RobotContext, container, bottom_z: float, height: float) -> list[str]:
@@ -503,22 +503,21 @@ def update_carried(ctx: RobotContext) -> None:
     square (from its collision mesh; a parked PR2's elbows stick out 0.43 m to the sides),
     each as an outline in the robot's frame checked against the furniture that rises above
     the lowest point that sticks out."""
-    x, y, yaw = ctx.modules.base_pose()
+    x, y, yaw = ctx.scene.base
     c, s = math.cos(yaw), math.sin(yaw)
     groups: dict[float, list[np.ndarray]] = {}
     for holding in ctx.holding.values():
-        obj = ctx.world.objects[holding.obj]
-        ex, ey, ez = obj.extents
+        ex, ey, ez = ctx.scene.items[holding.obj].extents
         local = np.array([[sx * ex / 2, sy * ey / 2, sz * ez] for sx in (-1, 1)
                           for sy in (-1, 1) for sz in (0, 1)])
-        rotation = _se3(ctx.modules.object_pose(holding.obj))
-        corners = local @ rotation.rotation.T + rotation.translation
+        frame = ctx.scene.item_matrix(holding.obj)
+        corners = local @ frame[:3, :3].T + frame[:3, 3]
         dx, dy = corners[:, 0] - x, corners[:, 1] - y
         robot_frame = np.column_stack([c * dx + s * dy, -s * dx + c * dy, corners[:, 2]])
         _stick_out(robot_frame, ctx.checker.half_size_m, groups)
     for bucket, points in _upper_body_outline(ctx, set(ARMS)).items():
         groups.setdefault(bucket, []).append(points)
-    ctx.checker.set_carried([(np.vstack(points), carried_map(ctx.world, bucket))
+    ctx.checker.set_carried([(np.vstack(points), carried_map(ctx.scene, bucket))
                              for bucket, points in sorted(groups.items())],
                             _exact_upper_body(ctx) if groups else None)
     ctx.footprint_stale = False
@@ -526,25 +525,11 @@ def update_carried(ctx: RobotContext) -> None:
 
 def _exact_upper_body(ctx: RobotContext):
     """A check of the robot's upper body and carried objects, as they are now, at another
-    base pose, in the world itself (PyBullet): exact where the 2D outlines are coarse."""
-    robot = ctx.world.robot
-    held = ctx.held_objects()
-    scene = ctx.collisions.scene(["torso_lift_joint"], held)
-    q = scene.current()
-    poses = {h.name: ctx.world.objects[h.name].pose() for h in held}
-
-    def check(x: float, y: float, yaw: float) -> bool:
-        base, now = robot.base_pose(), scene.current()
-        robot.set_base_pose(x, y, yaw)
-        try:
-            return scene.is_free(q)
-        finally:
-            robot.set_base_pose(*base)
-            scene.set_state(now)
-            for name, (pos, orn) in poses.items():
-                ctx.world.objects[name].set_pose(pos, orn)
-
-    return check
+    base pose, against the kitchen and the items (the planning scene's exact test):
+    exact where the 2D outlines are coarse."""
+    check = ctx.collisions.check(["torso_lift_joint"], self_collision=False)
+    q = check.current()
+    return lambda x, y, yaw: check.is_free_at((x, y, yaw), q)
 
 
 def _stick_out(points: np.ndarray, square: float, groups: dict[float, list[np.ndarray]],
@@ -564,19 +549,17 @@ def _upper_body_outline(ctx: RobotContext, arms: set[str]) -> dict[float, np.nda
     """What of the links of `arms` sticks out of the base in the current configuration
     (robot frame, by height); computed once per configuration of the arm (and the torso)
     and world."""
-    robot = ctx.world.robot
-    joints = robot.joint_positions()
-    parts = ctx.collisions.upper_body_parts()
+    joints = ctx.scene.joint_positions()
     out: dict[float, list[np.ndarray]] = {}
-    for part, (names, links) in parts.items():
+    for part, (names, links) in upper_body_parts(ctx.scene).items():
         if part not in arms:
             continue
         key = ("outline", part, tuple(round(joints[n], 2) for n in names))
-        if key not in ctx.world.cache:
+        if key not in ctx.scene.cache:
             # (a pure function of the robot's model: kept for the process too)
-            ctx.world.cache[key] = _OUTLINES.get_or_compute(
+            ctx.scene.cache[key] = _OUTLINES.get_or_compute(
                 key, lambda links=links: _part_outline(ctx, links))
-        for bucket, points in ctx.world.cache[key].items():
+        for bucket, points in ctx.scene.cache[key].items():
             out.setdefault(bucket, []).append(points)
     return {b: np.vstack(p) for b, p in out.items()}
 
@@ -584,10 +567,8 @@ def _upper_body_outline(ctx: RobotContext, arms: set[str]) -> dict[float, np.nda
 def _part_outline(ctx: RobotContext, links: list[int]) -> dict[float, np.ndarray]:
     """What of these robot links sticks out of the base as they stand (by height)."""
     groups: dict[float, list[np.ndarray]] = {}
-    with ctx.collisions.preserved():
-        ctx.world.robot.set_base_pose(0.0, 0.0, 0.0)
-        for points in ctx.collisions.upper_body_points(links):
-            _stick_out(points, ctx.checker.half_size_m, groups)
+    for points in upper_body_points(ctx.scene, links):  # (the base at the origin)
+        _stick_out(points, ctx.checker.half_size_m, groups)
     return {b: np.vstack(p) for b, p in groups.items()}
 
 

@@ -1,9 +1,12 @@
-"""The robot a plan acts through: world, process modules, planners, clock, task tree.
+"""The robot a plan acts through: planning scene, process modules, planners, clock, tasks.
 
 There is no global "current robot": a plan receives a `RobotContext`, made explicitly or
-with `simulated_robot(world)`. Which process modules execute its motions is an argument.
-The context keeps the robot's clock (driving and arm time of the executed trajectories),
-the task tree of what was performed, and, if asked, writes a trace of every state.
+with `simulated_robot(setup)`. Designators ask the context's planning scene about the
+world (never the world that executes); the process modules execute the motions planned
+on it and report the world back, and the scene is updated from their reports after every
+motion. The context keeps the robot's clock (driving and arm time of the executed
+trajectories), the task tree of what was performed, and, if asked, writes a trace of
+every state.
 """
 
 from __future__ import annotations
@@ -17,13 +20,12 @@ from typing import Any
 
 import numpy as np
 
-from cramlite.designators.process_modules import ProcessModules, SimulatedProcessModules
+from cramlite.backends.base import Backend, ProcessModules
 from cramlite.designators.tasks import TaskTree
 from cramlite.motion.arm_planner import ArmMotionPlanner, ArmPlannerOptions
 from cramlite.motion.base_planner import BaseMotionPlanner, BasePlannerOptions
-from cramlite.motion.collision import CollisionChecker, HeldObject
 from cramlite.motion.footprint import FLOOR_HEIGHT_M, FootprintChecker, OccupancyMap
-from cramlite.motion.ik import ARMS, arm_ik, tool_frame
+from cramlite.motion.ik import ARMS, arm_ik
 from cramlite.motion.trajectory import (
     ACCELERATION_TIME_S,
     BaseTrajectory,
@@ -31,16 +33,17 @@ from cramlite.motion.trajectory import (
     JointTrajectory,
 )
 from cramlite.process_cache import ProcessCache
+from cramlite.scene.collision import HeldObject, SceneCollisions
+from cramlite.scene.scene import PlanningScene
+from cramlite.scene.transforms import Quat, Vec3
 from cramlite.trace.format import TraceWriter
-from cramlite.world.bodies import Quat, Vec3
-from cramlite.world.world import World
+from cramlite.world.setup import Setup
 
-#: The joints a trace records (what cramlite moves), in this order.
+#: The joints a trace records (what cramlite moves), in this order: the torso, both arms,
+#: and every finger joint of both grippers (six each, moving together: the mimic tags).
 TRACE_JOINT_PREFIXES = ("torso_lift_joint", "r_shoulder", "r_upper_arm", "r_elbow", "r_forearm",
-                        "r_wrist", "l_shoulder", "l_upper_arm", "l_elbow", "l_forearm",
-                        "l_wrist")
-FINGER_JOINTS = ("gripper_l_finger_joint", "gripper_r_finger_joint",
-                 "gripper_l_finger_tip_joint", "gripper_r_finger_tip_joint")
+                        "r_wrist", "r_gripper", "l_shoulder", "l_upper_arm", "l_elbow",
+                        "l_forearm", "l_wrist", "l_gripper")
 
 
 @dataclass(frozen=True)
@@ -80,22 +83,22 @@ class Holding:
     relative: tuple[Vec3, Quat] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
 
 
-def robot_limits(world: World, speed_scale: float = 1.0) -> JointLimits:
+def robot_limits(scene: PlanningScene, speed_scale: float = 1.0) -> JointLimits:
     """The robot's joint limits from its URDF (velocity scaled; acceleration assumed)."""
-    robot = world.robot
-    velocity = {n: v * speed_scale for n, v in robot.velocity_limits.items()}
+    joints = scene.robot.joints
+    velocity = {n: j.velocity * speed_scale for n, j in joints.items()}
     return JointLimits(
-        lower={n: lo for n, (lo, _) in robot.joint_limits.items()},
-        upper={n: hi for n, (_, hi) in robot.joint_limits.items()},
+        lower={n: j.lower for n, j in joints.items()},
+        upper={n: j.upper for n, j in joints.items()},
         velocity=velocity,
         acceleration={n: v / ACCELERATION_TIME_S for n, v in velocity.items()},
-        continuous=frozenset(n for n in robot.joint_index if robot.is_continuous(n)),
-        prismatic=frozenset(robot.prismatic))
+        continuous=frozenset(n for n, j in joints.items() if j.kind == "continuous"),
+        prismatic=frozenset(n for n, j in joints.items() if j.kind == "prismatic"))
 
 
-def _joint_state(world: World) -> tuple[float, ...]:
+def _joint_state(scene: PlanningScene) -> tuple[float, ...]:
     """The drawers' and doors' positions, rounded: what the 2D maps depend on."""
-    return tuple(round(v, 3) for v in world.world_joint_positions().values())
+    return tuple(round(v, 3) for v in scene.world_joint_positions().values())
 
 
 #: 2D maps kept for the process, at most 48 (about 1 MB each; a map is a pure function of
@@ -103,42 +106,43 @@ def _joint_state(world: World) -> tuple[float, ...]:
 _MAPS: ProcessCache[OccupancyMap] = ProcessCache(48)
 
 
-def occupancy_map(world: World, min_top_m: float = 0.0) -> OccupancyMap:
-    """The world's 2D map as its drawers and doors stand now (only links whose top is
-    above `min_top_m` count), cached per world: by height and joint state, and by the
-    links that count (carried objects at many heights share a few maps)."""
-    key = ("occupancy", min_top_m, _joint_state(world))
-    if key not in world.cache:
-        boxes = world.environment_footprints()  # (a door swung open: its outline)
+def occupancy_map(scene: PlanningScene, min_top_m: float = 0.0) -> OccupancyMap:
+    """The kitchen's 2D map as its drawers and doors are believed to stand (only links
+    whose top is above `min_top_m` count), cached per scene: by height and joint state,
+    and by the links that count (carried objects at many heights share a few maps)."""
+    key = ("occupancy", min_top_m, _joint_state(scene))
+    if key not in scene.cache:
+        boxes = scene.environment_footprints()  # (a door swung open: its outline)
         counted = tuple((name, tuple(np.round(lo, 4)), tuple(np.round(hi, 4)),
                          None if outlines is None else
                          tuple(tuple(np.round(o, 4).ravel()) for o in outlines))
                         for name, lo, hi, outlines in boxes
                         if hi[2] <= FLOOR_HEIGHT_M or hi[2] > max(min_top_m, FLOOR_HEIGHT_M))
-        # (maps are kept for the process too, by what they are drawn from: another world
+        # (maps are kept for the process too, by what they are drawn from: another scene
         # of the same kitchen, e.g. the next setup a bench worker loads, reuses them)
-        world.cache[key] = _MAPS.get_or_compute(
+        scene.cache[key] = _MAPS.get_or_compute(
             counted, lambda: OccupancyMap(boxes, min_top_m=min_top_m))
-    return world.cache[key]
+    return scene.cache[key]
 
 
-def carried_map(world: World, lowest_z: float) -> OccupancyMap:
+def carried_map(scene: PlanningScene, lowest_z: float) -> OccupancyMap:
     """The fixed world that a carried object whose bottom is at `lowest_z` can touch
     (links whose top is above it), by the centimetre."""
-    return occupancy_map(world, math.floor(lowest_z * 100) / 100)
+    return occupancy_map(scene, math.floor(lowest_z * 100) / 100)
 
 
-def collision_checker(world: World) -> CollisionChecker:
-    if "collision" not in world.cache:
-        world.cache["collision"] = CollisionChecker(world)
-    return world.cache["collision"]
+def scene_collisions(scene: PlanningScene) -> SceneCollisions:
+    if "collision" not in scene.cache:
+        scene.cache["collision"] = SceneCollisions(scene)
+    return scene.cache["collision"]
 
 
 @dataclass
 class RobotContext:
-    """Everything designators resolve against and motions execute through."""
+    """Everything designators resolve against (the planning scene) and motions execute
+    through (the process modules)."""
 
-    world: World
+    scene: PlanningScene
     modules: ProcessModules
     rng: np.random.Generator
     options: ExecutionOptions = field(default_factory=ExecutionOptions)
@@ -155,15 +159,15 @@ class RobotContext:
     driven_xy: list[np.ndarray] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self.checker = FootprintChecker(occupancy_map(self.world))
+        self.checker = FootprintChecker(occupancy_map(self.scene))
         #: What sticks out of the base (arms, held objects) has changed since the checker
         #: was told (see `base_checker`).
         self.footprint_stale = True
         self.base_planner = BaseMotionPlanner(self.checker, self.planner_options)
-        self.collisions = collision_checker(self.world)
+        self.collisions = scene_collisions(self.scene)
         for arm in ARMS:  # the arms' IK models: built once per process, with the robot's
             arm_ik(arm)   # other models (loading, not planning: outside a trial's wall time)
-        self.limits = robot_limits(self.world, self.options.joint_speed_scale)
+        self.limits = robot_limits(self.scene, self.options.joint_speed_scale)
         self.arm_planner = ArmMotionPlanner(self.limits, self.arm_planner_options)
         self.tasks = TaskTree(lambda: self.time_s)
         #: Last IK solution per (arm, grasp): the seed of the next solve.
@@ -176,10 +180,8 @@ class RobotContext:
         #: Arm motions that needed OMPL (the straight path collided) and all arm motions.
         self.planned_motions = 0
         self.arm_motions = 0
-        robot = self.world.robot
-        self.trace_joints = [n for n in robot.joint_index
-                             if n.startswith(TRACE_JOINT_PREFIXES)
-                             or any(n == f"{a}_{f}" for a in "rl" for f in FINGER_JOINTS)]
+        self.trace_joints = [n for n in self.scene.robot.joints
+                             if n.startswith(TRACE_JOINT_PREFIXES)]
 
     @property
     def time_s(self) -> float:
@@ -190,12 +192,24 @@ class RobotContext:
         self.log.append(text)
 
     def held_objects(self) -> list[HeldObject]:
-        return [HeldObject(h.obj, tool_frame(arm), h.relative) for arm, h in self.holding.items()]
+        return [HeldObject(name, held.arm, held.relative)
+                for name, held in self.scene.held.items()]
+
+    def observe(self) -> None:
+        """Update the planning scene from what the process modules report."""
+        self.scene.observe(self.modules)
+
+    def settle(self, objects: list[str]) -> None:
+        """Let released objects come to rest (physics, where the backend has it), then
+        observe where they are."""
+        self.modules.settle(self.options.settle_s, objects)
+        self.observe()
 
     # -- executing trajectories ---------------------------------------------------------
     def drive(self, trajectory: BaseTrajectory) -> None:
         t0 = self.time_s
         self.modules.execute_base_trajectory(trajectory, self._observer(t0, trajectory.times))
+        self.observe()
         self.base_path_m += trajectory.length_m
         self.driven_xy.append(np.asarray(trajectory.poses)[:, :2].copy())
         self.drive_s += trajectory.duration_s
@@ -203,14 +217,15 @@ class RobotContext:
     def move_joints(self, trajectory: JointTrajectory) -> None:
         t0 = self.time_s
         self.modules.execute_joint_trajectory(trajectory, self._observer(t0, trajectory.times))
+        self.observe()
         self.arm_s += trajectory.duration_s
         self.footprint_stale = True  # an arm or the torso moved
         if trajectory.world:  # a drawer or door moved: the base planner's map changes
             self.refresh_maps()
 
     def refresh_maps(self) -> None:
-        """Point the base planner at the map of the world as it stands now."""
-        self.checker.occupancy = occupancy_map(self.world)
+        """Point the base planner at the map of the kitchen as it is believed to stand."""
+        self.checker.occupancy = occupancy_map(self.scene)
         self.footprint_stale = True  # (what sticks out is checked against maps too)
 
     def base_checker(self) -> FootprintChecker:
@@ -233,19 +248,19 @@ class RobotContext:
             return
         joints = self.modules.joint_positions(self.trace_joints)
         objects = {}
-        for name in self.world.objects:
+        for name in self.scene.items:
             pos, orn = self.modules.object_pose(name)
             objects[name] = [*pos, *orn]
         world_joints = self.modules.world_joint_positions()
         self.trace.write_state(self.time_s if t is None else t, self.modules.base_pose(),
                                [joints[n] for n in self.trace_joints],
-                               [world_joints[n] for n in self.world.world_joints],
+                               [world_joints[n] for n in self.scene.kitchen.joints],
                                {h.obj: arm for arm, h in self.holding.items()}, objects,
                                self.tasks.current_action())
 
     def trace_header(self, setup: str, plan: str, strategy: str, seed: int) -> dict[str, Any]:
         return {"setup": setup, "plan": plan, "strategy": strategy, "seed": seed,
-                "joints": self.trace_joints, "world_joints": list(self.world.world_joints)}
+                "joints": self.trace_joints, "world_joints": list(self.scene.kitchen.joints)}
 
     def open_trace(self, path: str | Path, setup: str, plan: str, strategy: str,
                    seed: int) -> TraceWriter:
@@ -255,9 +270,30 @@ class RobotContext:
 
 
 @contextlib.contextmanager
-def simulated_robot(world: World, seed: int | np.random.Generator = 0,
-                    options: ExecutionOptions | None = None) -> Iterator[RobotContext]:
-    """A context whose motions run in the given PyBullet world."""
+def simulated_robot(setup: Setup | Backend | Any, seed: int | np.random.Generator = 0,
+                    options: ExecutionOptions | None = None,
+                    backend: str | None = None) -> Iterator[RobotContext]:
+    """A context whose motions run in a backend's world of the setup (default: the
+    default backend), planned on a scene of the setup. Instead of a setup, a backend
+    already loaded (or a PyBullet `World`) may be given: it is not closed afterwards."""
+    from cramlite.backends import default_backend, load_backend
+
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
-    yield RobotContext(world=world, modules=SimulatedProcessModules(world), rng=rng,
-                       options=options or ExecutionOptions())
+    owned = isinstance(setup, Setup)
+    if owned:
+        world = load_backend(backend or default_backend(), setup)
+    elif isinstance(setup, Backend):
+        world = setup
+    else:  # a PyBullet World
+        from cramlite.backends.pybullet import PyBulletBackend
+
+        world = PyBulletBackend.around(setup)
+    try:
+        scene = PlanningScene(world.setup)
+        ctx = RobotContext(scene=scene, modules=world.modules, rng=rng,
+                           options=options or ExecutionOptions())
+        ctx.observe()
+        yield ctx
+    finally:
+        if owned:
+            world.close()

@@ -7,7 +7,8 @@ arm's sweet spot) and by how far the robot would have to drive, then checked in 
 order: footprint free in the 2D map, then for every configuration the actions will use
 (picking: pre-grasp, grasp, lift, park; placing: pre-place above the spot, place,
 retreat, park) an IK solution and no robot link or carried object inside the kitchen or
-another item. Only fully checked candidates are offered.
+another item (or the robot itself), asked of the planning scene. Only fully checked
+candidates are offered.
 
 `PlacingLocation`: where an object may be put: at a target (then small offsets within
 the placing tolerance), or on free spots of a surface, nearest to a preferred point.
@@ -36,11 +37,12 @@ from cramlite.designators.grasps import (
 )
 from cramlite.designators.motions import gripper_joints
 from cramlite.designators.objects import ObjectDesignator
-from cramlite.motion.collision import HeldObject
-from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names, tool_frame
+from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names
 from cramlite.motion.trajectory import densify
 from cramlite.process_cache import ProcessCache
-from cramlite.world.bodies import Quat, Vec3, quat_yaw
+from cramlite.scene.collision import HeldObject
+from cramlite.scene.robot_points import upper_body_points
+from cramlite.scene.transforms import Quat, Vec3, pose_matrix, quat_yaw
 from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT, TORSO_UP_M
 
 BasePose = tuple[float, float, float]
@@ -116,7 +118,7 @@ class CostmapLocation:
 
     def candidates(self, ctx: RobotContext) -> Iterator[tuple[float, BasePose, str, str]]:
         """(score, base pose, arm, grasp), best (lowest) score first."""
-        here = ctx.modules.base_pose()
+        here = ctx.scene.base
         px, py, _ = self.point
         steps = round(360 / self.angle_step_deg)
         yaw = np.radians(np.arange(steps) * self.angle_step_deg) - math.pi
@@ -183,7 +185,7 @@ class CostmapLocation:
                              RETREAT_RISE_M)
             poses = {"joints": (target, True), "pre_joints": (pre, True),
                      "post_joints": (post, False)}
-        torso = ctx.modules.joint_positions([TORSO_JOINT])[TORSO_JOINT]
+        torso = ctx.scene.joint_positions([TORSO_JOINT])[TORSO_JOINT]
         checks = ConfigurationChecks(ctx, base, arm, self.obj, relative)
         # keep the torso where it is (it moves at 1.3 cm/s); if that is out of reach or
         # collides, and the torso is not at the table-setting height, let it move there
@@ -196,34 +198,32 @@ class CostmapLocation:
                     self.rejected["ik"] += 1
                     return None
                 continue
-            with ctx.collisions.preserved([self.obj, *held(ctx)]):
-                free = all(checks.free(solved[key], holding)
-                           for key, (_, holding) in poses.items())
-                if free and self.purpose == PLACE:  # and the gripper opens there
-                    free = checks.free(solved["joints"], False)
+            free = all(checks.free(solved[key], holding)
+                       for key, (_, holding) in poses.items())
+            if free and self.purpose == PLACE:  # and the gripper opens there
+                free = checks.free(solved["joints"], False)
             if free:
                 break
             if last:
                 self.rejected["arm collision"] += 1
                 return None
-        with ctx.collisions.preserved([self.obj, *held(ctx)]):
-            torso_after = solved["post_joints"][TORSO_JOINT]
-            park = (carry_joints(ctx, arm, grasp, height, torso_after) if self.purpose == PICK
-                    else {**PARK_JOINTS[arm], TORSO_JOINT: torso_after})
-            if park is None or not checks.free(park, self.purpose == PICK):
-                self.rejected["arm collision"] += 1
-                return None
-            # the motions the actions will make, each a straight joint-space path?
-            pre, at, post = solved["pre_joints"], solved["joints"], solved["post_joints"]
-            if self.purpose == PICK:
-                arrive = {**PARK_JOINTS[arm], TORSO_JOINT: torso}
-                legs = [(arrive, pre, False), (pre, at, False), (at, post, True),
-                        (post, park, True)]
-            else:
-                arrive = carry_joints(ctx, arm, grasp, height, torso) or pre
-                legs = [(arrive, pre, True), (pre, at, True), (at, post, False),
-                        (post, park, False)]
-            straight = all(checks.path_free(a, b, holding) for a, b, holding in legs)
+        torso_after = solved["post_joints"][TORSO_JOINT]
+        park = (carry_joints(ctx, arm, grasp, height, torso_after) if self.purpose == PICK
+                else {**PARK_JOINTS[arm], TORSO_JOINT: torso_after})
+        if park is None or not checks.free(park, self.purpose == PICK):
+            self.rejected["arm collision"] += 1
+            return None
+        # the motions the actions will make, each a straight joint-space path?
+        pre, at, post = solved["pre_joints"], solved["joints"], solved["post_joints"]
+        if self.purpose == PICK:
+            arrive = {**PARK_JOINTS[arm], TORSO_JOINT: torso}
+            legs = [(arrive, pre, False), (pre, at, False), (at, post, True),
+                    (post, park, True)]
+        else:
+            arrive = carry_joints(ctx, arm, grasp, height, torso) or pre
+            legs = [(arrive, pre, True), (pre, at, True), (at, post, False),
+                    (post, park, False)]
+        straight = all(checks.path_free(a, b, holding) for a, b, holding in legs)
         ctx.ik_seeds[(arm, grasp, self.purpose)] = solved["joints"]
         return ReachablePose(base, arm, grasp, at, pre, post, relative, straight)
 
@@ -288,10 +288,10 @@ def carry_joints(ctx: RobotContext, arm: str, grasp: str, grasp_height: float,
     robot can drive up to a table carrying it; the rest of the robot as it stands now
     counts there too); solved once per world and standing of the rest, from fixed starts."""
     own = {TORSO_JOINT, *arm_joint_names(arm)}
-    rest = tuple(round(v, 3) for n, v in sorted(ctx.world.robot.joint_positions().items())
+    rest = tuple(round(v, 3) for n, v in sorted(ctx.scene.joint_positions().items())
                  if n not in own)
     key = ("carry", arm, grasp, round(grasp_height, 3), round(torso_m, 3), rest)
-    cache = ctx.world.cache
+    cache = ctx.scene.cache
     if key not in cache:
         # (a pure function of the robot's model and joints: kept for the process too)
         cache[key] = _CARRY.get_or_compute(
@@ -327,15 +327,11 @@ CARRY_STARTS = 8
 
 def _lowest_outside(ctx: RobotContext, joints: dict[str, float]) -> float:
     """How high the lowest point of the robot that sticks out of its base square is (the
-    robot at the origin), with `joints` (restored afterwards)."""
-    robot = ctx.world.robot
+    robot at the origin), with `joints`."""
     square = ctx.checker.half_size_m
-    with ctx.collisions.preserved():
-        robot.set_base_pose(0.0, 0.0, 0.0)
-        robot.set_joint_positions(joints)
-        lows = [float(pts[np.any(np.abs(pts[:, :2]) > square, axis=1), 2].min())
-                for pts in ctx.collisions.upper_body_points()
-                if np.any(np.abs(pts[:, :2]) > square)]
+    lows = [float(pts[np.any(np.abs(pts[:, :2]) > square, axis=1), 2].min())
+            for pts in upper_body_points(ctx.scene, joints=joints)
+            if np.any(np.abs(pts[:, :2]) > square)]
     return min(lows, default=np.inf)
 
 
@@ -350,22 +346,19 @@ class ConfigurationChecks:
         self.base = base
         self.names = [TORSO_JOINT, *arm_joint_names(arm)]
         self.arm = arm
-        self.held = [HeldObject(obj, tool_frame(arm), relative)] if relative else []
+        self.held = [HeldObject(obj, arm, pose_matrix(*relative))] if relative else []
         self.obj = obj
         self._scenes: dict[bool, object] = {}
 
     def _scene(self, holding: bool):
-        ctx = self.ctx
         if holding not in self._scenes:
-            ctx.world.robot.set_base_pose(*self.base)
-            others = ctx.held_objects()  # already in the other hand
-            self._scenes[holding] = ctx.collisions.scene(
+            # what is already in the other hand; the gripper closed on the object while
+            # it is held, open before and after
+            others = [h for h in self.ctx.held_objects() if h.name != self.obj]
+            self._scenes[holding] = self.ctx.collisions.check(
                 self.names, (self.held if holding else []) + others,
-                ignore=() if holding else (self.obj,))
-        ctx.world.robot.set_base_pose(*self.base)
-        # the gripper is closed on the object while it is held, open before and after
-        ctx.world.robot.set_joint_positions(gripper_joints(self.arm,
-                                                           "close" if holding else "open"))
+                ignore=() if holding else (self.obj,), base=self.base,
+                fixed=gripper_joints(self.arm, "close" if holding else "open"))
         return self._scenes[holding]
 
     def _vector(self, joints: dict[str, float]) -> np.ndarray:
@@ -413,7 +406,7 @@ class PlacingLocation:
             rings = [(0.0, 1)] + [(r, 8) for r in (0.015, 0.03)]
             return [(tx + r * math.cos(2 * math.pi * k / n), ty + r * math.sin(2 * math.pi * k / n),
                      tz) for r, n in rings for k in range(n)]
-        surf = ctx.world.surface(self.surface)
+        surf = ctx.scene.surface(self.surface)
         margin = self.edge_margin_m + self.obj.radius_m(ctx)
         xs = np.arange(surf.x_min + margin, surf.x_max - margin + 1e-9, self.spot_spacing_m)
         ys = np.arange(surf.y_min + margin, surf.y_max - margin + 1e-9, self.spot_spacing_m)
@@ -444,18 +437,18 @@ class PlacingLocation:
 
     def _others(self, ctx: RobotContext) -> list[np.ndarray]:
         out = []
-        for name, obj in ctx.world.objects.items():
+        for name, item in ctx.scene.items.items():
             if name == self.obj.name or name in held(ctx):
                 continue
-            (x, y, _), orn = obj.pose()
-            yaw = 0.0 if obj.is_round() else quat_yaw(orn)
+            (x, y, _), orn = ctx.scene.object_pose(name)
+            yaw = 0.0 if item.is_round() else quat_yaw(orn)
             out.append(rectangle((x, y), object_size(ctx, name), yaw))
         return out
 
 
 def object_size(ctx: RobotContext, name: str) -> tuple[float, float]:
     """Footprint (x, y extent in the object's own frame), however it is held now."""
-    extents = ctx.world.objects[name].extents
+    extents = ctx.scene.items[name].extents
     return extents[0], extents[1]
 
 

@@ -21,10 +21,11 @@ from cramlite.designators.grasps import in_base_frame
 from cramlite.designators.tasks import recorded
 from cramlite.motion.ik import arm_ik, arm_prefix
 from cramlite.motion.trajectory import time_base_path, time_joint_path
+from cramlite.scene.models import pr2_model
 
 BasePose = tuple[float, float, float]
-GRIPPER_JOINTS = ("gripper_l_finger_joint", "gripper_r_finger_joint",
-                  "gripper_l_finger_tip_joint", "gripper_r_finger_tip_joint")
+#: The finger joint the others of a gripper follow (see the URDF's mimic tags).
+GRIPPER_LEADER = "gripper_l_finger_joint"
 GRIPPER_OPEN, GRIPPER_CLOSED = 0.5, 0.0
 
 
@@ -33,7 +34,7 @@ def move_joints(ctx: RobotContext, joints: dict[str, float], allow_contact: Sequ
     """Plan, time and execute a joint motion to `joints` (only the joints that change move);
     raises MotionPlanningFailed if no collision-free path is found."""
     names = list(joints)
-    current = ctx.modules.joint_positions(names)
+    current = ctx.scene.joint_positions(names)
     start = np.array([current[n] for n in names])
     goal = ctx.limits.unwrap_goal(names, start, np.array([joints[n] for n in names]))
     moving = [i for i in range(len(names)) if abs(goal[i] - start[i]) > 1e-9]
@@ -41,11 +42,9 @@ def move_joints(ctx: RobotContext, joints: dict[str, float], allow_contact: Sequ
         return
     names = [names[i] for i in moving]
     start, goal = start[moving], goal[moving]
-    held = ctx.held_objects()
-    with ctx.collisions.preserved([h.name for h in held]):
-        scene = ctx.collisions.scene(names, held, ignore=allow_contact)
-        path = ctx.arm_planner.plan(scene, start, goal, ctx.rng)
-        why = "" if path is not None else _why(scene, start, goal, ctx)
+    check = ctx.collisions.check(names, ignore=allow_contact)
+    path = ctx.arm_planner.plan(check, start, goal, ctx.rng)
+    why = "" if path is not None else _why(check, start, goal, ctx)
     ctx.arm_motions += 1
     if path is None:
         raise MotionPlanningFailed(f"no collision-free path for {_joint_group(names)}{why}")
@@ -105,8 +104,8 @@ class MoveTCPMotion:
     @recorded
     def perform(self, ctx: RobotContext) -> None:
         ik = arm_ik(self.arm)
-        target = in_base_frame(self.pose, ctx.modules.base_pose())
-        seed = ctx.modules.joint_positions(ik.joint_names)
+        target = in_base_frame(self.pose, ctx.scene.base)
+        seed = ctx.scene.joint_positions(ik.joint_names)
         solution = (ik.solve(target, ctx.rng, seed, fixed_torso_m=seed["torso_lift_joint"])
                     or ik.solve(target, ctx.rng, seed))
         if solution is None:
@@ -126,8 +125,10 @@ class MoveTorsoMotion:
 
 
 def gripper_joints(arm: str, state: str) -> dict[str, float]:
+    """The finger joints of a gripper open or closed: its leading joint and the five that
+    follow it (the URDF's mimic tags)."""
     value = GRIPPER_OPEN if state == "open" else GRIPPER_CLOSED
-    return {f"{arm_prefix(arm)}_{j}": value for j in GRIPPER_JOINTS}
+    return pr2_model().with_mimics({f"{arm_prefix(arm)}_{GRIPPER_LEADER}": value})
 
 
 @dataclass(frozen=True)
@@ -155,6 +156,8 @@ class AttachMotion:
     @recorded
     def perform(self, ctx: RobotContext) -> None:
         ctx.modules.attach(self.arm, self.obj)
+        ctx.observe()
+        ctx.scene.attach(self.arm, self.obj)
         ctx.footprint_stale = True
 
 
@@ -166,4 +169,6 @@ class DetachMotion:
     @recorded
     def perform(self, ctx: RobotContext) -> None:
         ctx.modules.detach(self.arm, self.obj)
+        ctx.scene.detach(self.obj)
+        ctx.observe()
         ctx.footprint_stale = True

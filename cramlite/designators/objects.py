@@ -1,4 +1,5 @@
-"""Object designators: describe an object by name and/or type, resolve it in the world."""
+"""Object designators: describe an object by name and/or type, resolve it in the planning
+scene (what the robot believes is there)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from dataclasses import dataclass
 
 from cramlite.designators.context import RobotContext
 from cramlite.designators.failures import ObjectNotFound
-from cramlite.world.bodies import Quat, Vec3
+from cramlite.scene.transforms import Quat, Vec3
 
 
 @dataclass(frozen=True)
@@ -18,18 +19,18 @@ class ObjectDesignator:
     type: str
 
     def pose(self, ctx: RobotContext) -> tuple[Vec3, Quat]:
-        return ctx.modules.object_pose(self.name)
+        return ctx.scene.object_pose(self.name)
 
     def height_m(self, ctx: RobotContext) -> float:
-        return ctx.world.objects[self.name].height()
+        return ctx.scene.items[self.name].height()
 
     def is_round(self, ctx: RobotContext) -> bool:
         """A cylinder: turning it about its axis changes nothing."""
-        return ctx.world.objects[self.name].is_round()
+        return ctx.scene.items[self.name].is_round()
 
     def radius_m(self, ctx: RobotContext) -> float:
         """Half the diagonal of the object's footprint (a circle that covers it)."""
-        x, y, _ = ctx.world.objects[self.name].extents
+        x, y, _ = ctx.scene.items[self.name].extents
         return 0.5 * float((x**2 + y**2) ** 0.5)
 
 
@@ -41,7 +42,7 @@ class ObjectDesignatorDescription:
     types: Sequence[str] | None = None
 
     def ground(self, ctx: RobotContext) -> Iterator[ObjectDesignator]:
-        for name, obj in ctx.world.objects.items():
+        for name, obj in ctx.scene.items.items():
             if self.names is not None and name not in self.names:
                 continue
             if self.types is not None and obj.type not in self.types:

@@ -32,13 +32,13 @@ from cramlite.designators.failures import (
     PlanFailure,
 )
 from cramlite.designators.grasps import in_base_frame
-from cramlite.designators.locations import CostmapLocation, held, reaching_seed
+from cramlite.designators.locations import CostmapLocation, reaching_seed
 from cramlite.designators.motions import MoveArmJointsMotion, MoveGripperMotion, gripper_joints
 from cramlite.designators.tasks import recorded
 from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names
 from cramlite.motion.trajectory import time_along_path, wrap_angle
 from cramlite.process_cache import ProcessCache
-from cramlite.world.bodies import Vec3
+from cramlite.scene.transforms import Vec3
 from cramlite.world.containers import Container
 from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT
 
@@ -74,32 +74,32 @@ class HandlePath:
 
 def handle_path(ctx: RobotContext, container: Container, start: float, end: float,
                 ) -> HandlePath:
-    world = ctx.world
-    with world.joint_at(container.joint, end):
-        far = _grasp_pose(world, container)
-    with world.joint_at(container.joint, start):
-        near = _grasp_pose(world, container)
+    scene = ctx.scene
+    with scene.world_joint_at(container.joint, end):
+        far = _grasp_pose(scene, container)
+    with scene.world_joint_at(container.joint, start):
+        near = _grasp_pose(scene, container)
     length = float(np.linalg.norm(far.translation - near.translation))
     if container.kind != "drawer":  # an arc: its length from the angle and the radius
-        with world.joint_at(container.joint, 0.0):
-            hinge = np.asarray(world.link_frame(container.link)[0])
+        with scene.world_joint_at(container.joint, 0.0):
+            hinge = np.asarray(scene.link_frame(container.link)[0])
         radius = float(np.linalg.norm((near.translation - hinge)[:2]))
         length = radius * abs(end - start)
     count = max(2, math.ceil(length / HANDLE_STEP_M) + 1)
     values = np.linspace(start, end, count)
     poses = []
     for value in values:
-        with world.joint_at(container.joint, float(value)):
-            poses.append(_grasp_pose(world, container))
+        with scene.world_joint_at(container.joint, float(value)):
+            poses.append(_grasp_pose(scene, container))
     steps = [float(np.linalg.norm(b.translation - a.translation))
              for a, b in zip(poses[:-1], poses[1:], strict=True)]
     return HandlePath(values, poses, np.concatenate([[0.0], np.cumsum(steps)]))
 
 
-def _grasp_pose(world, container: Container) -> pin.SE3:
+def _grasp_pose(scene, container: Container) -> pin.SE3:
     """Where the tool frame grasps the handle: at the grasp point, pointing into the
     container's front (the moving link's x axis), rolled to the handle's bar."""
-    pos, (qx, qy, qz, qw) = world.link_frame(container.link)
+    pos, (qx, qy, qz, qw) = scene.link_frame(container.link)
     frame = pin.SE3(pin.Quaternion(qw, qx, qy, qz).toRotationMatrix(), np.asarray(pos))
     roll = pin.SE3(pin.rpy.rpyToMatrix(container.roll, 0.0, 0.0), np.asarray(container.grasp))
     return frame * roll
@@ -167,8 +167,8 @@ class AccessingLocation:
     def _stage_maps(self, ctx: RobotContext) -> list:
         out = []
         for value in np.linspace(self.start, self.end, FOOTPRINT_STAGES):
-            with ctx.world.joint_at(self.container.joint, float(value)):
-                out.append(occupancy_map(ctx.world))
+            with ctx.scene.world_joint_at(self.container.joint, float(value)):
+                out.append(occupancy_map(ctx.scene))
         return out
 
     def reach_from(self, ctx: RobotContext, base: BasePose, arm: str,
@@ -176,7 +176,7 @@ class AccessingLocation:
         """IK along the handle path from one base pose, every state checked (or None)."""
         path = path or handle_path(ctx, self.container, self.start, self.end)
         names = tuple([TORSO_JOINT, *arm_joint_names(arm)])
-        torso = ctx.modules.joint_positions([TORSO_JOINT])[TORSO_JOINT]
+        torso = ctx.scene.joint_positions([TORSO_JOINT])[TORSO_JOINT]
         solved = self._solve(ctx, base, arm, torso, path)
         if solved is None:
             self.rejected["ik"] += 1
@@ -198,7 +198,7 @@ class AccessingLocation:
         checked every time (`_free`)."""
         key = ("handle ik", self.container.name, round(self.start, 4), round(self.end, 4),
                tuple(round(v, 4) for v in base), arm, round(torso, 4))
-        cache = ctx.world.cache
+        cache = ctx.scene.cache
         if key not in cache:
             # (also kept for the process, by the handle's poses themselves: another world
             # of the same kitchen, e.g. the next setup a bench worker loads, reuses it)
@@ -213,30 +213,19 @@ class AccessingLocation:
         """Every state free with the container (and what is inside) where it is then: the
         gripper open at the pre-grasp and retreat, closed on the handle (which it may
         touch) in between."""
-        world, robot = ctx.world, ctx.world.robot
         container = self.container
-        touch = (container.handle,)
-        others = ctx.held_objects()
-        exclude = set(held(ctx))
-        before = ctx.modules.world_joint_positions()[container.joint]
+        checks = {gripper: ctx.collisions.check(names, ignore=(container.handle,), base=base,
+                                                fixed=gripper_joints(arm, gripper))
+                  for gripper in ("open", "close")}
         stages = [(pre, self.start, "open")]
         stages += [(dict(zip(names, q, strict=True)), float(v), "close")
                    for q, v in zip(states, values, strict=True)]
         stages.append((post, self.end, "open"))
-        with ctx.collisions.preserved([*world.objects]):
-            robot.set_base_pose(*base)
-            scene, fingers = ctx.collisions.scene(names, others, ignore=touch), None
-            try:
-                for joints, value, gripper in stages:
-                    if gripper != fingers:
-                        robot.set_joint_positions(gripper_joints(arm, gripper))
-                        fingers = gripper
-                    world.set_world_joint(container.joint, value, exclude)  # items ride along
-                    scene.refresh_obstacles(container.joint)
-                    if not scene.is_free(np.array([joints[n] for n in names])):
-                        return False
-            finally:
-                world.set_world_joint(container.joint, before, exclude)
+        for joints, value, gripper in stages:
+            check = checks[gripper]
+            check.move_world_joint(container.joint, value)  # (items inside ride along)
+            if not check.is_free(np.array([joints[n] for n in names])):
+                return False
         return True
 
     def describe_rejections(self) -> str:
@@ -332,10 +321,10 @@ class FollowHandleMotion:
 
 
 def container_named(ctx: RobotContext, name: str) -> Container:
-    container = ctx.world.containers.get(name)
+    container = ctx.scene.containers.get(name)
     if container is None:
         raise ObjectNotFound(f"no container {name!r} in the world; expected one of "
-                             f"{', '.join(ctx.world.containers) or 'none'}", obj=name)
+                             f"{', '.join(ctx.scene.containers) or 'none'}", obj=name)
     return container
 
 
@@ -343,7 +332,7 @@ def _move_container(ctx: RobotContext, name: str, target: str, arms: Sequence[st
                     ) -> None:
     container = container_named(ctx, name)
     goal = container.open_value if target == "open" else 0.0
-    now = ctx.modules.world_joint_positions()[container.joint]
+    now = ctx.scene.world_joint_positions()[container.joint]
     if abs(now - goal) < 1e-3:
         return
     free = [a for a in (arms or ARMS) if a not in ctx.holding]
@@ -432,7 +421,7 @@ def _let_go(ctx: RobotContext, container: Container, access: AccessPose) -> None
     of the way (a real robot's failure: simulated motions run whole or not at all) may
     leave no free way back to the pre-grasp; then the arm stays, as before."""
     touch = (container.handle,)
-    value = ctx.modules.world_joint_positions()[container.joint]
+    value = ctx.scene.world_joint_positions()[container.joint]
     back = access.post_joints if abs(value - access.values[-1]) < 1e-3 else access.pre_joints
     with contextlib.suppress(PlanFailure):
         MoveGripperMotion(access.arm, "open", touch).perform(ctx)
@@ -465,38 +454,23 @@ class CloseAction:
 
 def container_of(ctx: RobotContext, obj: str) -> Container | None:
     """The container an item is inside now, if any (not if it is held)."""
-    if obj in held(ctx):
-        return None
-    for container in ctx.world.containers.values():
-        if obj in ctx.world.items_inside(container):
-            return container
-    return None
+    return ctx.scene.container_of(obj)
 
 
 def container_at(ctx: RobotContext, point: Vec3,
                  ) -> tuple[Container, Vec3] | tuple[None, None]:
     """The container whose inside holds a point given as it is with the container closed
     (a place pose in a drawer), and the point in the inside's frame; (None, None) if none."""
-    from cramlite.world.bullet import p
-
-    world = ctx.world
-    for container in world.containers.values():
-        with world.joint_at(container.joint, 0.0):
-            local, _ = p.multiplyTransforms(*p.invertTransform(
-                *world.link_frame(container.inside_link)), point, (0, 0, 0, 1))
-        (x0, y0, z0), (x1, y1, z1) = container.inside_min, container.inside_max
-        if x0 <= local[0] <= x1 and y0 <= local[1] <= y1 and z0 - 0.02 <= local[2] <= z1:
-            return container, tuple(local)
-    return None, None
+    return ctx.scene.container_at(point)
 
 
 @contextlib.contextmanager
 def virtually_open(ctx: RobotContext, container: Container) -> Iterator[None]:
-    """Plan as if the container were open (its joint and the base planner's map), without
-    opening it."""
-    with ctx.world.joint_at(container.joint, container.open_value):
+    """Plan as if the container were open (the scene's belief and the base planner's
+    map), without opening it."""
+    with ctx.scene.world_joint_at(container.joint, container.open_value):
         saved = ctx.checker.occupancy
-        ctx.checker.occupancy = occupancy_map(ctx.world)
+        ctx.checker.occupancy = occupancy_map(ctx.scene)
         ctx.footprint_stale = True  # what sticks out, against the open container too
         try:
             yield
@@ -506,5 +480,4 @@ def virtually_open(ctx: RobotContext, container: Container) -> Iterator[None]:
 
 
 def is_open(ctx: RobotContext, container: Container) -> bool:
-    value = ctx.modules.world_joint_positions()[container.joint]
-    return value >= container.open_value - 1e-3
+    return ctx.scene.is_open(container)

@@ -22,8 +22,8 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
-from cramlite.motion.collision import CollisionScene
 from cramlite.motion.trajectory import JointLimits, densify
+from cramlite.scene.collision import MotionCheck as CollisionScene
 
 #: OMPL plans keeping this much further from obstacles than the final check requires, so
 #: the densified path (whose states lie between OMPL's) passes that check.

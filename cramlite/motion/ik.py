@@ -18,7 +18,8 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg import lapack
 
-from cramlite.world.pr2 import TORSO_JOINT, pinocchio_pr2
+from cramlite.scene.models import pr2_model
+from cramlite.world.pr2 import TORSO_JOINT
 
 ARMS = ("right", "left")
 ARM_JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "upper_arm_roll_joint",
@@ -77,7 +78,7 @@ class ArmIK:
     def __init__(self, arm: str, with_torso: bool = True, options: IKOptions | None = None):
         self.arm = arm
         self.options = options or IKOptions()
-        full = pinocchio_pr2().model
+        full = pr2_model().model
         keep = ([TORSO_JOINT] if with_torso else []) + arm_joint_names(arm)
         lock = [full.getJointId(n) for n in full.names[1:] if n not in keep]
         self.model = pin.buildReducedModel(full, lock, pin.neutral(full))

@@ -1,8 +1,6 @@
-"""World layer: PyBullet worlds, the PR2 model, setup files."""
+"""Setup files, the kitchen's containers, the PR2's constants and top-down maps: what a
+setup is, without any simulator (the backends load it; the planning scene models it)."""
 
-from cramlite.world.bodies import RobotBody, WorldObject
 from cramlite.world.setup import ItemSpec, Pose, Setup, load_setup
-from cramlite.world.world import Snapshot, Surface, World
 
-__all__ = ["ItemSpec", "Pose", "RobotBody", "Setup", "Snapshot", "Surface", "World",
-           "WorldObject", "load_setup"]
+__all__ = ["ItemSpec", "Pose", "Setup", "load_setup"]

@@ -1,11 +1,12 @@
 """A top-down map of a setup: the kitchen seen from above (matplotlib, no rendering).
 
-`load_layout` reads the fixed geometry once from a headless `World` (the furniture's boxes
-with the drawers and doors closed, the containers) and the setup (the robot's start, each
-item's start spot and target); `draw_layout` draws it on a matplotlib axes with every item
-and target labelled in two columns beside the kitchen (leader lines to the spots), so
-labels never cover each other or the floor the robot drives on. `save_top_view` is
-`cramlite show SETUP --top`. Needs matplotlib (`pip install cramlite[plots]`).
+`load_layout` reads the fixed geometry once from the setup's planning scene (the
+furniture's boxes with the drawers and doors closed, the containers) and the setup (the
+robot's start, each item's start spot and target); `draw_layout` draws it on a matplotlib
+axes with every item and target labelled in two columns beside the kitchen (leader lines
+to the spots), so labels never cover each other or the floor the robot drives on.
+`save_top_view` is `cramlite show SETUP --top`. Needs matplotlib (`pip install
+cramlite[plots]`).
 """
 
 from __future__ import annotations
@@ -69,17 +70,17 @@ class Layout:
 
 
 def load_layout(setup: Setup) -> Layout:
-    """The setup's map (loads its world headless for a moment)."""
-    from cramlite.world.world import World
+    """The setup's map (from its planning scene's models: no simulator)."""
+    from cramlite.scene.scene import PlanningScene
 
-    with World.from_setup(setup) as world:
-        raw = {name: (lo, hi) for name, lo, hi in world.environment_boxes()}
-        moving = {c.link for c in world.containers.values()}
-        containers = []
-        for container in sorted(world.containers.values(), key=lambda c: c.name):
-            # a drawer: its moving box; a cupboard: the body its door closes
-            lo, hi = raw.get(container.inside_link) or raw[container.link]
-            containers.append(Box(container.name, lo[0], lo[1], hi[0], hi[1], hi[2]))
+    scene = PlanningScene(setup)
+    raw = {name: (lo, hi) for name, lo, hi, _ in scene.environment_footprints()}
+    moving = {c.link for c in scene.containers.values()}
+    containers = []
+    for container in sorted(scene.containers.values(), key=lambda c: c.name):
+        # a drawer: its moving box; a cupboard: the body its door closes
+        lo, hi = raw.get(container.inside_link) or raw[container.link]
+        containers.append(Box(container.name, lo[0], lo[1], hi[0], hi[1], hi[2]))
     boxes = [Box(name, lo[0], lo[1], hi[0], hi[1], hi[2]) for name, (lo, hi) in raw.items()
              if name != FLOOR and name not in moving]
     floor = next((Box(FLOOR, lo[0], lo[1], hi[0], hi[1], hi[2])

@@ -5,23 +5,13 @@ Every call passes the owning world's client id, so two worlds never share state.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
-from cramlite.world.bullet import p
+from cramlite.backends.pybullet.client import p
+from cramlite.scene.transforms import Quat, Vec3, quat_yaw, yaw_quat
 from cramlite.world.setup import ItemSpec
 
-Vec3 = tuple[float, float, float]
-Quat = tuple[float, float, float, float]
-
-
-def yaw_quat(yaw: float) -> Quat:
-    return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
-
-
-def quat_yaw(q: Quat) -> float:
-    x, y, z, w = q
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+__all__ = ["Quat", "RobotBody", "Vec3", "WorldObject", "quat_yaw", "yaw_quat"]
 
 
 @dataclass

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cramlite.world.bullet import p
-from cramlite.world.world import World
+from cramlite.backends.pybullet.client import p
+from cramlite.backends.pybullet.world import World
 
 #: The default camera of `render` (and `cramlite show`).
 DEFAULT_CAMERA = {"target": (0.3, 0.2, 0.5), "distance": 5.6, "yaw_deg": 135.0,

@@ -1,74 +1,25 @@
-"""Process modules: what executes motion designators on a robot.
+"""The PyBullet backend's process modules: kinematic execution in a PyBullet `World`.
 
-`ProcessModules` is the interface a real robot's drivers would implement: it receives
-timed, collision-checked trajectories (planned by the motion designators) and follows
-them. The simulated set moves the PR2 kinematically through every state of a trajectory
-in a PyBullet world (as PyCRAM's BulletWorld does, but never jumping to a goal) and
-carries attached objects along with the gripper.
+The robot moves through every state of a trajectory (as PyCRAM's BulletWorld does, but
+never jumping to a goal) and carries attached objects along with the gripper; a drawer
+or door follows the hand; a released item settles under physics (`settle`).
 """
 
 from __future__ import annotations
 
-from abc import ABC, abstractmethod
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
-from cramlite.motion.ik import tool_frame
+from cramlite.backends.base import BasePose, ProcessModules, StateObserver
+from cramlite.backends.pybullet.bodies import Quat, Vec3
+from cramlite.backends.pybullet.client import p
+from cramlite.backends.pybullet.world import TIME_STEP_S, World
 from cramlite.motion.trajectory import BaseTrajectory, JointTrajectory
-from cramlite.world.bodies import Quat, Vec3
-from cramlite.world.bullet import p
-from cramlite.world.world import TIME_STEP_S, World
+from cramlite.scene.scene import tool_frame
 
-BasePose = tuple[float, float, float]
-#: Called with the index of each state right after the robot reached it.
-StateObserver = Callable[[int], None] | None
 #: A settling object is at rest below these speeds.
 REST_LINEAR_M_S = 0.005
 REST_ANGULAR_RAD_S = 0.05
 SETTLE_CHUNK_STEPS = 6
-
-
-class ProcessModules(ABC):
-    """Executes atomic motions. Implement this to drive another (or a real) robot."""
-
-    @abstractmethod
-    def execute_base_trajectory(self, trajectory: BaseTrajectory,
-                                on_state: StateObserver = None) -> None:
-        """Drive through the trajectory's poses (x, y, yaw) at its times."""
-
-    @abstractmethod
-    def execute_joint_trajectory(self, trajectory: JointTrajectory,
-                                 on_state: StateObserver = None) -> None:
-        """Move the trajectory's joints (arm, torso, gripper) through its states."""
-
-    @abstractmethod
-    def attach(self, arm: str, obj: str) -> None:
-        """The object now moves with the gripper."""
-
-    @abstractmethod
-    def detach(self, arm: str, obj: str) -> None:
-        """Let go of the object."""
-
-    @abstractmethod
-    def settle(self, seconds: float, objects: Sequence[str] = ()) -> None:
-        """Let the world come to rest (a real robot just waits)."""
-
-    @abstractmethod
-    def base_pose(self) -> BasePose: ...
-
-    @abstractmethod
-    def world_joint_positions(self) -> dict[str, float]:
-        """Where the drawers and doors are (perception on a real robot)."""
-
-    @abstractmethod
-    def joint_positions(self, names: Sequence[str]) -> dict[str, float]: ...
-
-    @abstractmethod
-    def object_pose(self, obj: str) -> tuple[Vec3, Quat]:
-        """Where an object is (perception on a real robot)."""
-
-    @abstractmethod
-    def tool_pose(self, arm: str) -> tuple[Vec3, Quat]:
-        """Where a gripper's tool frame is (forward kinematics of the measured joints)."""
 
 
 class SimulatedProcessModules(ProcessModules):
@@ -89,9 +40,17 @@ class SimulatedProcessModules(ProcessModules):
         for obj, (arm, _, _) in list(self._attached.items()):
             self.detach(arm, obj)
 
+    def _states(self, count: int, on_state: StateObserver) -> range:
+        """The states to put the world in: every one while something watches (a trace, the
+        GUI), else the last (the robot moves kinematically and nothing in this world acts
+        on the states between: replaying them would only cost time)."""
+        return range(count) if on_state is not None or self.world.gui else range(count - 1,
+                                                                                  count)
+
     def execute_base_trajectory(self, trajectory: BaseTrajectory,
                                 on_state: StateObserver = None) -> None:
-        for i, (x, y, yaw) in enumerate(trajectory.poses):
+        for i in self._states(len(trajectory.poses), on_state):
+            x, y, yaw = trajectory.poses[i]
             self.robot.set_base_pose(float(x), float(y), float(yaw))
             self._carry()
             if on_state is not None:
@@ -101,7 +60,8 @@ class SimulatedProcessModules(ProcessModules):
                                  on_state: StateObserver = None) -> None:
         indices = [self.robot.joint_index[n] for n in trajectory.names]
         held = set(self._attached)
-        for i, state in enumerate(trajectory.positions):
+        for i in self._states(len(trajectory.positions), on_state):
+            state = trajectory.positions[i]
             p.resetJointStatesMultiDof(self.robot.body, indices, [[float(v)] for v in state],
                                        physicsClientId=self.client)
             for joint, values in trajectory.world.items():  # the handle pulls the drawer

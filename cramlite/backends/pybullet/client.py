@@ -3,7 +3,7 @@
 Import `p` from here instead of `import pybullet`, so that `--json` output stays clean.
 """
 
-from cramlite.world.quiet import c_output_silenced
+from cramlite.backends.pybullet.quiet import c_output_silenced
 
 with c_output_silenced(stderr=True):
     import pybullet as p

@@ -1,0 +1,652 @@
+"""Is a robot configuration collision-free? Checked on the planning scene with coal.
+
+A `MotionCheck` fixes what one motion query moves (a set of joints), what the grippers
+hold, what the motion may touch (the item being grasped, a handle in the hand), and the
+rest of the robot (its base pose, its other joints: e.g. a gripper open or closed). A
+state is free when:
+
+- no moving robot link is inside the kitchen or an item (real meshes against the
+  kitchen's and items' primitives, `TOLERANCE_M` of penetration allowed for contacts such
+  as an item standing on the surface it is put on);
+- no moving robot link is inside another robot link (self-collision: every pair whose
+  relative pose the motion changes and that the SRDF does not disable, no tolerance);
+- no held item is inside the kitchen, another item or the robot (its own gripper's palm
+  and fingers aside), and no moving link is inside what the other hand holds.
+
+Broadphase: a sphere about each moving shape against the boxes (axis-aligned, or turned
+where a door has swung open) of everything that stands still, and against the spheres of
+the other moving shapes, a few numpy calls for every state of a motion at once. Narrow
+phase: coal's exact test on the real meshes. coal sees surfaces that cross; a shape wholly
+inside a mesh (a fingertip inside the shoulder's housing) crosses none, so where a shape
+could lie inside a mesh the winding number of one of its points decides
+(`cramlite.scene.geometry`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import coal
+import numpy as np
+
+from cramlite.scene.geometry import (
+    PointGrid,
+    inside_mesh,
+    point_triangle_distances,
+    primitive_depth,
+    surface_samples,
+    winding_numbers,
+)
+from cramlite.scene.kinematics import BatchedFrames
+from cramlite.scene.models import MESH, Shape
+from cramlite.scene.scene import PlanningScene, tool_frame
+from cramlite.scene.transforms import planar
+
+#: Penetration allowed between the robot (or a held item) and the kitchen or an item at
+#: the states a motion is checked at: contacts (an item put down stands on its surface; a
+#: finger pad on the counter beside a spoon) are not collisions. The trace's check allows
+#: 1 cm, along the motion between states too.
+TOLERANCE_M = 0.006
+#: Spacing of the surface points by which a mesh's depth inside a primitive is measured.
+SAMPLE_SPACING_M = 0.01
+#: Those points, by shape (the models, and so their shapes, live for the process).
+_SAMPLES: dict[int, PointGrid] = {}
+
+
+@dataclass(frozen=True)
+class HeldObject:
+    """An item that moves with a gripper's tool frame."""
+
+    name: str
+    arm: str
+    relative: np.ndarray  #: the item's frame in the tool frame (4 x 4)
+
+
+@dataclass(frozen=True)
+class Contact:
+    """A penetration found by `MotionCheck.contacts` (for messages and tests)."""
+
+    what: str  #: robot link or held item
+    other: str  #: kitchen link, item or robot link
+    depth_m: float
+
+    def describe(self) -> str:
+        return f"{self.what} {self.depth_m * 100:.1f} cm inside {self.other}"
+
+
+@dataclass(frozen=True)
+class _Part:
+    label: str
+    shape: Shape
+    frame_link: str  #: the robot link whose frame carries it
+    robot_link: str | None  #: the robot link it is (None: a held item)
+    held: str | None  #: the held item it is
+    held_arm: str | None  #: the gripper holding it (a held item)
+    moving_joints: frozenset[str]  #: the moving joints that move it
+
+
+@dataclass(frozen=True)
+class _Obstacle:
+    label: str
+    shape: Shape
+    kind: str  #: kitchen, item, robot or held
+    owner: str  #: kitchen link, item name or robot link
+    frame_link: str | None = None  #: the robot link carrying it (robot, held)
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """What one kind of query moves and checks (the same for every query that moves the
+    same joints, holds the same items in the same hands and may touch the same things):
+    its parts, its obstacles, which part-obstacle pairs and moving pairs it checks."""
+
+    parts: tuple[_Part, ...]
+    obstacles: tuple[_Obstacle, ...]
+    links: tuple[str, ...]  #: the robot links carrying the parts
+    rows: np.ndarray  #: each part's row in `links`
+    allowed: np.ndarray  #: parts x obstacles
+    pairs: np.ndarray  #: k x 2 moving parts checked against each other
+    static_links: tuple[str, ...]  #: the robot links carrying obstacles
+    kitchen: slice  #: where the kitchen's shapes are among the obstacles
+
+
+def _transform(matrix: np.ndarray) -> coal.Transform3s:
+    return coal.Transform3s(np.ascontiguousarray(matrix[:3, :3]),
+                            np.ascontiguousarray(matrix[:3, 3]))
+
+
+def _bounds(shapes: Sequence[Shape], placements: np.ndarray,
+            ) -> tuple[np.ndarray, np.ndarray, dict[int, tuple]]:
+    """Axis-aligned bounds (lo, hi: N x 3) of placed shapes (their local bounds turned),
+    and the boxes among them turned about an axis (index -> centre, rotation, half)."""
+    if not len(shapes):
+        return np.zeros((0, 3)), np.zeros((0, 3)), {}
+    centres = np.array([s.centre for s in shapes])
+    halves = np.array([s.half for s in shapes])
+    rotations = placements[:, :3, :3]
+    mid = (rotations @ centres[:, :, None])[:, :, 0] + placements[:, :3, 3]
+    span = (np.abs(rotations) @ halves[:, :, None])[:, :, 0]
+    turned = {}
+    square = np.abs(rotations).max(axis=1).min(axis=1) >= 1 - 1e-6
+    for k in np.flatnonzero(~square):
+        if shapes[k].kind == "box":
+            turned[int(k)] = (mid[k], rotations[k], halves[k])
+    return mid - span, mid + span, turned
+
+
+class SceneCollisions:
+    """Builds motion checks on one planning scene; keeps what is derived from the models
+    (surface samples and hulls of the meshes, the layouts of kinds of queries, the
+    kitchen's placed shapes by the drawers' and doors' positions) for the scene's life."""
+
+    def __init__(self, scene: PlanningScene, tolerance_m: float = TOLERANCE_M):
+        self.scene = scene
+        self.tolerance_m = tolerance_m
+        self.frames = BatchedFrames(scene.robot)
+        robot = scene.robot
+        self.gripper_links = {arm: {link for link in robot.link_frames
+                                    if f"{arm[0]}_wrist_roll_joint" in robot.joints_above(link)}
+                              for arm in ("right", "left")}
+        self._hulls: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+        self._layouts: dict[tuple, _Layout] = {}
+        self._kitchen: dict[tuple, tuple[np.ndarray, np.ndarray, np.ndarray, dict]] = {}
+        self.request = coal.CollisionRequest()
+        self._requests: dict[float, coal.CollisionRequest] = {}
+
+    def enclosed(self, a: Shape, pa: np.ndarray, b: Shape, pb: np.ndarray) -> bool:
+        """Does one shape lie wholly inside the other, a mesh (no surfaces cross)? Then a
+        point of the inner one lies inside the mesh: in its bounds, in its convex hull,
+        and (the exact test, rarely reached) its winding number is 1."""
+        for inner, pi, outer, po in ((a, pa, b, pb), (b, pb, a, pa)):
+            if outer.kind != MESH or inner.radius >= outer.radius:
+                continue
+            point = inner.vertices[0] if inner.kind == MESH else inner.centre
+            world = pi[:3, :3] @ point + pi[:3, 3]
+            local = (world - po[:3, 3]) @ po[:3, :3]
+            if np.any(np.abs(local - outer.centre) > outer.half):
+                continue
+            normals, offsets = self.hull(outer)
+            if np.any(normals @ local + offsets > 1e-9):
+                continue
+            if inside_mesh(local[None], outer)[0]:
+                return True
+        return False
+
+    def depth(self, a: Shape, pa: np.ndarray, b: Shape, pb: np.ndarray) -> float:
+        """How deep two placed shapes are inside each other (m; 0 if they are apart or
+        only touch): two primitives by coal's signed distance; a mesh in a primitive by
+        the mesh's surface points inside it; two meshes by the surface points of each
+        inside the other; a shape wholly inside a mesh by its surface points' distance from
+        the mesh's surface."""
+        result = coal.CollisionResult()
+        coal.collide(a.geometry, _transform(pa), b.geometry, _transform(pb), self.request,
+                     result)
+        meshes = a.kind == MESH or b.kind == MESH
+        if not result.isCollision():
+            if meshes and self.enclosed(a, pa, b, pb):
+                return max(_enclosure_depth(a, pa, b, pb), 1e-9)
+            return 0.0
+        if a.kind == MESH and b.kind == MESH:
+            return _mesh_depth(self, a, pa, b, pb)
+        if meshes:
+            mesh, pm, prim, pp = (a, pa, b, pb) if a.kind == MESH else (b, pb, a, pa)
+            points = self.samples_near(mesh, pm, prim, pp)
+            if not len(points):
+                return 0.0
+            local = (points - pp[:3, 3]) @ pp[:3, :3]
+            return float(primitive_depth(local, prim).max())
+        return _primitive_pair_depth(self, a, pa, b, pb)
+
+    def hull(self, shape: Shape) -> tuple[np.ndarray, np.ndarray]:
+        """The outward normals and offsets of a mesh's convex hull (inside: n.x + d <= 0)."""
+        key = ("hull", id(shape))
+        if key not in self._hulls:
+            from scipy.spatial import ConvexHull
+
+            equations = ConvexHull(shape.vertices).equations
+            self._hulls[key] = (equations[:, :3].copy(), equations[:, 3].copy())
+        return self._hulls[key]
+
+    def samples_near(self, shape: Shape, placement: np.ndarray, other: Shape,
+                     other_placement: np.ndarray) -> np.ndarray:
+        """A mesh's surface points (world) within the bounds of another placed shape."""
+        grid = _SAMPLES.get(id(shape))
+        if grid is None:
+            grid = _SAMPLES[id(shape)] = PointGrid(surface_samples(shape, SAMPLE_SPACING_M))
+        centre = other_placement[:3, :3] @ other.centre + other_placement[:3, 3]
+        span = np.abs(other_placement[:3, :3]) @ other.half
+        corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+        local = (centre + corners * span - placement[:3, 3]) @ placement[:3, :3]
+        points = grid.within(local.min(axis=0), local.max(axis=0))
+        return points @ placement[:3, :3].T + placement[:3, 3]
+
+    def request_with(self, margin: float) -> coal.CollisionRequest:
+        request = self._requests.get(margin)
+        if request is None:
+            request = self._requests[margin] = coal.CollisionRequest()
+            request.security_margin = margin
+        return request
+
+    def check(self, joints: Sequence[str], held: Sequence[HeldObject] | None = None,
+              ignore: Sequence[str] = (), base: tuple[float, float, float] | None = None,
+              fixed: dict[str, float] | None = None,
+              self_collision: bool = True) -> MotionCheck:
+        """A check of motions of `joints` (held items: the scene's, unless given), allowed
+        to touch `ignore` (items or kitchen links), the base at `base` and the robot's
+        other joints as believed (or as `fixed` sets some of them). Without
+        `self_collision`, the robot is checked against the kitchen and the items only (a
+        check of the whole upper body at other base poses: it does not move itself)."""
+        if held is None:
+            held = [HeldObject(name, h.arm, h.relative)
+                    for name, h in self.scene.held.items()]
+        return MotionCheck(self, list(joints), list(held), frozenset(ignore), base,
+                           fixed or {}, self_collision)
+
+    def layout(self, joints: Sequence[str], held: Sequence[HeldObject],
+               ignore: frozenset[str], self_collision: bool = True) -> _Layout:
+        key = (frozenset(joints), tuple((h.name, h.arm) for h in held), ignore,
+               self_collision)
+        if key not in self._layouts:
+            self._layouts[key] = self._make_layout(set(joints), held, ignore, self_collision)
+        return self._layouts[key]
+
+    def _make_layout(self, moving: set[str], held: Sequence[HeldObject],
+                     ignore: frozenset[str], self_collision: bool) -> _Layout:
+        scene, robot = self.scene, self.scene.robot
+        parts: list[_Part] = []
+        obstacles: list[_Obstacle] = []
+        for link, shapes in robot.shapes_by_link.items():
+            above = frozenset(moving & set(robot.joints_above(link)))
+            for shape in shapes:
+                if above:
+                    parts.append(_Part(link, shape, link, link, None, None, above))
+                else:
+                    obstacles.append(_Obstacle(link, shape, "robot", link, link))
+        for item in held:
+            tool = tool_frame(item.arm)
+            above = frozenset(moving & set(robot.joints_above(tool)))
+            for shape in scene.items[item.name].model.shapes:
+                if above:
+                    parts.append(_Part(repr(item.name), shape, tool, None, item.name,
+                                       item.arm, above))
+                else:
+                    obstacles.append(_Obstacle(repr(item.name), shape, "held", item.name,
+                                               tool))
+        first = len(obstacles)
+        obstacles += [_Obstacle(s.link, s, "kitchen", s.link) for s in scene.kitchen.shapes]
+        kitchen = slice(first, len(obstacles))
+        held_names = {h.name for h in held}
+        for name, item in scene.items.items():
+            if name not in held_names:
+                obstacles += [_Obstacle(repr(name), s, "item", name) for s in item.model.shapes]
+        links = tuple(dict.fromkeys(p.frame_link for p in parts))
+        rows = np.array([links.index(p.frame_link) for p in parts], dtype=int)
+        arms = {h.name: h.arm for h in held}
+        allowed = np.array([[self._may_touch(p, o, arms, ignore) and
+                             (self_collision or o.kind not in ("robot", "held"))
+                             for o in obstacles] for p in parts],
+                           dtype=bool).reshape(len(parts), len(obstacles))
+        pairs = np.array([(i, j) for i in range(len(parts)) for j in range(i + 1, len(parts))
+                          if self_collision and self._may_meet(parts[i], parts[j])],
+                         dtype=int).reshape(-1, 2)
+        static = tuple(dict.fromkeys(o.frame_link for o in obstacles if o.frame_link))
+        return _Layout(tuple(parts), tuple(obstacles), links, rows, allowed, pairs, static,
+                       kitchen)
+
+    def _may_touch(self, part: _Part, obstacle: _Obstacle, arms: dict[str, str],
+                   ignore: frozenset[str]) -> bool:
+        if obstacle.owner in ignore and obstacle.kind in ("kitchen", "item"):
+            return False
+        if obstacle.kind == "robot":
+            if part.robot_link is not None:
+                return self.scene.robot.may_collide(part.robot_link, obstacle.owner)
+            return obstacle.owner not in self.gripper_links[part.held_arm]
+        if obstacle.kind == "held":
+            return part.robot_link is None or \
+                part.robot_link not in self.gripper_links[arms[obstacle.owner]]
+        return True
+
+    def _may_meet(self, a: _Part, b: _Part) -> bool:
+        """Two moving parts are checked if the motion moves them apart and they may
+        touch: two robot links the SRDF allows, a held item and a link of another gripper
+        than its own, two held items."""
+        if a.moving_joints == b.moving_joints:
+            return False  # (they move together)
+        if a.robot_link is not None and b.robot_link is not None:
+            return self.scene.robot.may_collide(a.robot_link, b.robot_link)
+        if a.robot_link is None and b.robot_link is None:
+            return True
+        item, link = (a, b) if a.robot_link is None else (b, a)
+        return link.robot_link not in self.gripper_links[item.held_arm]
+
+    def kitchen_block(self, world_joints: dict[str, float],
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+        """The kitchen's shapes placed (K x 4 x 4), their bounds and turned boxes, with the
+        drawers and doors at `world_joints` (kept by their values)."""
+        key = tuple(round(world_joints[n], 9) for n in self.scene.kitchen.joints)
+        block = self._kitchen.get(key)
+        if block is None:
+            if len(self._kitchen) > 512:
+                self._kitchen.clear()
+            frames = self.scene.kitchen_frames(world_joints)
+            shapes = self.scene.kitchen.shapes
+            placements = np.array([frames[s.link] @ s.in_link for s in shapes]).reshape(-1, 4, 4)
+            block = self._kitchen[key] = (placements, *_bounds(shapes, placements))
+        return block
+
+
+class MotionCheck:
+    """One motion query's collision problem: `is_free(q)`, `states_free(states)`."""
+
+    def __init__(self, owner: SceneCollisions, joints: list[str], held: list[HeldObject],
+                 ignore: frozenset[str], base: tuple[float, float, float] | None,
+                 fixed: dict[str, float], self_collision: bool = True):
+        scene = owner.scene
+        self.owner = owner
+        self.scene = scene
+        self.joints = joints
+        self.tolerance_m = owner.tolerance_m
+        self.values = scene.robot.with_mimics({**scene.belief.joints, **fixed})
+        self._q = scene.robot.q(self.values)  # (Pinocchio's configuration of them)
+        self.base = tuple(base or scene.base)
+        self.base_matrix = planar(*self.base)
+        self.checks = 0
+        self.held = held
+        layout = owner.layout(joints, held, ignore, self_collision)
+        self.layout = layout
+        self.parts = layout.parts
+        self.obstacles = layout.obstacles
+        self._rows = layout.rows
+        self._allowed, self._pairs = layout.allowed, layout.pairs
+        relative = {h.name: h.relative for h in held}
+        self._in_frame = np.array([relative[p.held] @ p.shape.in_link if p.held
+                                   else p.shape.in_link for p in self.parts]).reshape(-1, 4, 4)
+        shapes = [p.shape for p in self.parts]
+        self._centres = np.array([s.centre for s in shapes]).reshape(-1, 3)
+        self._halves = np.array([s.half for s in shapes]).reshape(-1, 3)
+        self._radii = np.array([s.radius for s in shapes])
+        #: each part's sphere centre in its frame, and the shape's rotation in that frame
+        self._rotations = self._in_frame[:, :3, :3]
+        self._centres = (self._rotations @ self._centres[:, :, None])[:, :, 0] + \
+            self._in_frame[:, :3, 3]
+        self._static_frames = scene.link_matrices(layout.static_links, self.values, self.base) \
+            if layout.static_links else {}
+        self._world_joints = dict(scene.belief.world_joints)
+        self._place_obstacles()
+
+    def _place_obstacles(self) -> None:
+        """Where every obstacle is (robot links and the other hand's item where the robot
+        stands, the kitchen as its drawers and doors stand, the items as believed), with
+        its bounds."""
+        layout = self.layout
+        placements = np.empty((len(self.obstacles), 4, 4))
+        relative = {h.name: h.relative for h in self.held}
+        kitchen_placed, kitchen_lo, kitchen_hi, kitchen_turned = \
+            self.owner.kitchen_block(self._world_joints)
+        poses: dict[str, np.ndarray] = {}
+        for k, obstacle in enumerate(self.obstacles):
+            if obstacle.kind == "robot":
+                placements[k] = self._static_frames[obstacle.frame_link] @ obstacle.shape.in_link
+            elif obstacle.kind == "held":
+                placements[k] = (self._static_frames[obstacle.frame_link]
+                                 @ relative[obstacle.owner] @ obstacle.shape.in_link)
+            elif obstacle.kind == "item":
+                if obstacle.owner not in poses:
+                    poses[obstacle.owner] = self._item_matrix(obstacle.owner)
+                placements[k] = poses[obstacle.owner] @ obstacle.shape.in_link
+        placements[layout.kitchen] = kitchen_placed
+        others = [k for k in range(len(self.obstacles)) if not
+                  (layout.kitchen.start <= k < layout.kitchen.stop)]
+        lo, hi = np.empty((len(self.obstacles), 3)), np.empty((len(self.obstacles), 3))
+        lo[layout.kitchen], hi[layout.kitchen] = kitchen_lo, kitchen_hi
+        turned = {k + layout.kitchen.start: v for k, v in kitchen_turned.items()}
+        if others:
+            o_lo, o_hi, o_turned = _bounds([self.obstacles[k].shape for k in others],
+                                           placements[others])
+            lo[others], hi[others] = o_lo, o_hi
+            turned.update({others[k]: v for k, v in o_turned.items()})
+        self._placements, self._lo, self._hi, self._turned = placements, lo, hi, turned
+        self._transforms: dict[int, coal.Transform3s] = {}
+
+    def _item_matrix(self, name: str) -> np.ndarray:
+        return self._item_poses[name] if name in getattr(self, "_item_poses", {}) \
+            else self.scene.item_matrix(name)
+
+    def _obstacle_transform(self, k: int) -> coal.Transform3s:
+        transform = self._transforms.get(k)
+        if transform is None:
+            transform = self._transforms[k] = _transform(self._placements[k])
+        return transform
+
+    def move_world_joint(self, joint: str, value: float) -> None:
+        """The drawer or door at `value` in this check (what it carries, items inside a
+        drawer included, moves with it), e.g. at each stage of opening it."""
+        scene = self.scene
+        with scene.world_joint_at(joint, value, carry=True):
+            self._item_poses = {name: scene.item_matrix(name) for name in scene.items
+                                if name not in scene.held}
+            self._world_joints = dict(scene.belief.world_joints)
+        self._place_obstacles()
+
+    # -- states ---------------------------------------------------------------------------
+    def _link_frames(self, states: np.ndarray) -> np.ndarray:
+        """World frames (S x L x 4 x 4) of the links carrying the parts."""
+        return self.owner.frames.frames(self.base_matrix, self._q, self.joints, states,
+                                        self.layout.links)
+
+    def _near(self, frames: np.ndarray, margin: float = 0.0,
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """Broadphase for S states: (S x parts x obstacles) parts whose boxes (their local
+        bounds turned into the world, axis-aligned) meet obstacle boxes, and (S x pairs)
+        moving parts whose boxes meet. A turned obstacle box (an open door) is tested
+        against the part's bounding sphere, not its axis-aligned bounds."""
+        s = len(frames)
+        placed = frames[:, self._rows]  # S x P x 4 x 4
+        rotations = placed[..., :3, :3]
+        centres = (rotations @ self._centres[None, :, :, None])[..., 0] + placed[..., :3, 3]
+        pad = max(0.0, margin)
+        spans = np.abs(rotations @ self._rotations) @ self._halves[None, :, :, None]
+        spans = spans[..., 0] + pad  # S x P x 3
+        near = np.zeros((s, len(self.parts), len(self.obstacles)), dtype=bool)
+        if len(self.obstacles) and len(self.parts):
+            low = (centres - spans).reshape(-1, 3).min(axis=0)
+            high = (centres + spans).reshape(-1, 3).max(axis=0)
+            close = np.flatnonzero(np.all((self._lo <= high) & (self._hi >= low), axis=1))
+            if len(close):
+                c, h = centres[:, :, None, :], spans[:, :, None, :]
+                meet = np.all((self._lo[close] <= c + h) & (self._hi[close] >= c - h), axis=3)
+                near[:, :, close] = meet & self._allowed[None][:, :, close]
+                radii = self._radii + pad
+                for k, (centre, rotation, half) in self._turned.items():
+                    idx = np.nonzero(near[:, :, k])
+                    if not len(idx[0]):
+                        continue
+                    local = (centres[idx] - centre) @ rotation
+                    gap = np.maximum(np.abs(local) - half, 0.0)
+                    near[idx[0], idx[1], k] = (gap * gap).sum(axis=1) < radii[idx[1]] ** 2
+        meets = np.zeros((s, len(self._pairs)), dtype=bool)
+        if len(self._pairs):
+            a, b = self._pairs[:, 0], self._pairs[:, 1]
+            meets = np.all(np.abs(centres[:, a] - centres[:, b]) <= spans[:, a] + spans[:, b],
+                           axis=2)
+        return near, meets
+
+    def states_free(self, states: np.ndarray, order: Sequence[int] | None = None) -> bool:
+        """Every state (rows of joint vectors) free: one broadphase for all of them, then
+        exact checks of the states that need one, in `order` (default: as given)."""
+        states = np.asarray(states, dtype=float).reshape(-1, len(self.joints))
+        self.checks += len(states)
+        if not len(states) or not len(self.parts):
+            return True
+        frames = self._link_frames(states)
+        near, meets = self._near(frames)
+        flagged = set(np.flatnonzero(near.any(axis=(1, 2)) | meets.any(axis=1)).tolist())
+        for i in (order if order is not None else range(len(states))):
+            if i in flagged and not self._state_free(frames[i], near[i], meets[i], 0.0):
+                return False
+        return True
+
+    def is_free(self, q: Sequence[float], margin_m: float = 0.0) -> bool:
+        """No penetration beyond what is allowed (keeping `margin_m` further away) at
+        joint vector q."""
+        self.checks += 1
+        if not len(self.parts):
+            return True
+        frames = self._link_frames(np.asarray(q, dtype=float)[None])
+        near, meets = self._near(frames, margin_m)
+        if not near.any() and not meets.any():
+            return True
+        return self._state_free(frames[0], near[0], meets[0], margin_m)
+
+    def is_free_at(self, base: tuple[float, float, float], q: Sequence[float]) -> bool:
+        """`is_free(q)` with the base at another pose (a check built without
+        self-collision: the robot's own links stand still relative to one another)."""
+        saved = self.base_matrix
+        self.base_matrix = planar(*base)
+        try:
+            return self.is_free(q)
+        finally:
+            self.base_matrix = saved
+
+    def _state_free(self, frames: np.ndarray, near: np.ndarray, meets: np.ndarray,
+                    margin: float) -> bool:
+        placed: dict[int, tuple[np.ndarray, coal.Transform3s]] = {}
+
+        def part(i: int) -> tuple[np.ndarray, coal.Transform3s]:
+            if i not in placed:
+                matrix = frames[self._rows[i]] @ self._in_frame[i]
+                placed[i] = (matrix, _transform(matrix))
+            return placed[i]
+
+        for p, k in np.argwhere(near):
+            pa, ta = part(p)
+            if self._collides(self.parts[p].shape, pa, ta, self.obstacles[k].shape,
+                              self._placements[k], self._obstacle_transform(k),
+                              self._allowance(self.obstacles[k], self.parts[p]), margin):
+                return False
+        for n in np.flatnonzero(meets):
+            i, j = self._pairs[n]
+            pa, ta = part(i)
+            pb, tb = part(j)
+            if self._collides(self.parts[i].shape, pa, ta, self.parts[j].shape, pb, tb,
+                              self._allowance(None, self.parts[i], self.parts[j]), margin):
+                return False
+        return True
+
+    def _collides(self, a: Shape, pa: np.ndarray, ta: coal.Transform3s, b: Shape,
+                  pb: np.ndarray, tb: coal.Transform3s, allowance: float,
+                  margin: float) -> bool:
+        """Are two placed shapes inside each other beyond what is allowed (keeping
+        `margin` further apart)?"""
+        owner = self.owner
+        clearance = margin - allowance  # > 0: they must be this far apart
+        meshes = a.kind == MESH or b.kind == MESH
+        result = coal.CollisionResult()
+        if clearance > 0 or not meshes:
+            coal.collide(a.geometry, ta, b.geometry, tb, owner.request_with(clearance), result)
+            if result.isCollision():
+                return True
+            return meshes and owner.enclosed(a, pa, b, pb)
+        coal.collide(a.geometry, ta, b.geometry, tb, owner.request, result)
+        if not result.isCollision():
+            return owner.enclosed(a, pa, b, pb)
+        if allowance - max(margin, 0.0) <= 0 or (a.kind == MESH and b.kind == MESH):
+            return True
+        mesh, pm, prim, pp = (a, pa, b, pb) if a.kind == MESH else (b, pb, a, pa)
+        points = owner.samples_near(mesh, pm, prim, pp)
+        if not len(points):
+            return False
+        local = (points - pp[:3, 3]) @ pp[:3, :3]
+        return float(primitive_depth(local, prim).max()) > allowance - max(margin, 0.0)
+
+    def _allowance(self, obstacle: _Obstacle | None, part: _Part,
+                   other: _Part | None = None) -> float:
+        """Penetration allowed: none between two robot links, `TOLERANCE_M` otherwise."""
+        robot_pair = part.robot_link is not None and (
+            (obstacle is not None and obstacle.kind == "robot") or
+            (other is not None and other.robot_link is not None))
+        return 0.0 if robot_pair else self.tolerance_m
+
+    def _depth(self, a: Shape, pa: np.ndarray, b: Shape, pb: np.ndarray, allowance: float,
+               margin: float) -> float:
+        """How far beyond what is allowed two placed shapes are inside each other (> 0:
+        a collision), measured (for messages)."""
+        depth = self.owner.depth(a, pa, b, pb)
+        limit = allowance - max(margin, 0.0)
+        return depth - limit if depth > limit and depth > 0 else 0.0
+
+    def contacts(self, q: Sequence[float] | None = None) -> list[Contact]:
+        """Every penetration beyond what is allowed at q (or as the robot stands), with
+        its depth, deepest first."""
+        q = np.array([self.values[n] for n in self.joints]) if q is None else np.asarray(q)
+        frames = self._link_frames(np.asarray(q, dtype=float)[None])[0]
+        near, meets = self._near(frames[None])
+        out = []
+        for p, k in np.argwhere(near[0]):
+            part, obstacle = self.parts[p], self.obstacles[k]
+            allowance = self._allowance(obstacle, part)
+            depth = self._depth(part.shape, frames[self._rows[p]] @ self._in_frame[p],
+                                obstacle.shape, self._placements[k], allowance, 0.0)
+            if depth > 0:
+                out.append(Contact(part.label, obstacle.label, depth + allowance))
+        for n in np.flatnonzero(meets[0]):
+            i, j = self._pairs[n]
+            a, b = self.parts[i], self.parts[j]
+            depth = self._depth(a.shape, frames[self._rows[i]] @ self._in_frame[i], b.shape,
+                                frames[self._rows[j]] @ self._in_frame[j], 0.0, 0.0)
+            if depth > 0:
+                out.append(Contact(a.label, b.label, depth))
+        return sorted(out, key=lambda c: -c.depth_m)
+
+    def current(self) -> np.ndarray:
+        """The moving joints' values as believed (or as `fixed` set them)."""
+        return np.array([self.values[n] for n in self.joints])
+
+
+def _enclosure_depth(a: Shape, pa: np.ndarray, b: Shape, pb: np.ndarray) -> float:
+    """How deep a shape wholly inside a mesh is: the largest distance of its surface points
+    from the mesh's surface."""
+    for inner, pi, outer, po in ((a, pa, b, pb), (b, pb, a, pa)):
+        if outer.kind != MESH:
+            continue
+        points = surface_samples(inner, SAMPLE_SPACING_M) @ pi[:3, :3].T + pi[:3, 3]
+        local = (points - po[:3, 3]) @ po[:3, :3]
+        inside = inside_mesh(local, outer)
+        if inside.any():
+            return float(point_triangle_distances(local[inside], outer.vertices,
+                                                  outer.triangles).max())
+    return 0.0
+
+
+def _mesh_depth(owner: SceneCollisions, a: Shape, pa: np.ndarray, b: Shape,
+                pb: np.ndarray) -> float:
+    """How deep two crossing meshes are inside each other: the largest distance from the
+    other's surface of the surface points of one that lie inside the other."""
+    deepest = 0.0
+    for inner, pi, outer, po in ((a, pa, b, pb), (b, pb, a, pa)):
+        points = owner.samples_near(inner, pi, outer, po)
+        if not len(points):
+            continue
+        local = (points - po[:3, 3]) @ po[:3, :3]
+        box = np.all(np.abs(local - outer.centre) <= outer.half + 1e-9, axis=1)
+        if not box.any():
+            continue
+        candidates = local[box]
+        inside = np.abs(winding_numbers(candidates, outer.vertices, outer.triangles)) > 0.5
+        if inside.any():
+            deepest = max(deepest, float(point_triangle_distances(
+                candidates[inside], outer.vertices, outer.triangles).max()))
+    return deepest
+
+
+def _primitive_pair_depth(owner: SceneCollisions, a: Shape, pa: np.ndarray, b: Shape,
+                          pb: np.ndarray) -> float:
+    """How deep two primitives are inside each other (coal's signed distance)."""
+    request = coal.DistanceRequest()
+    result = coal.DistanceResult()
+    coal.distance(a.geometry, _transform(pa), b.geometry, _transform(pb), request, result)
+    return max(0.0, -float(result.min_distance))
+
+
+__all__ = ["Contact", "HeldObject", "MotionCheck", "SceneCollisions", "TOLERANCE_M"]

@@ -1,0 +1,185 @@
+"""Refusing a setup a trial could not start from, on the planning scene (any backend).
+
+Every item stands on its surface (or fits inside its container) and starts inside
+nothing else; every target rests on the top of a surface, free of the furniture and of
+the other targets; the robot (arms parked) stands on the kitchen floor, inside no
+furniture and no item. Each refusal is a `SetupError` naming the file, the field and what
+was expected.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+import numpy as np
+
+from cramlite.errors import SetupError
+from cramlite.scene.collision import SceneCollisions
+from cramlite.scene.models import Shape
+from cramlite.scene.scene import FLOOR_LINK, PlanningScene, shape_corners
+from cramlite.scene.transforms import pose_matrix, yaw_quat
+from cramlite.world.pr2 import PARK_JOINTS
+from cramlite.world.setup import ItemSpec, Setup
+
+#: Penetration deeper than this between an item and another body is "inside" it.
+PENETRATION_TOLERANCE_M = 0.005
+#: An item must start within this height of its surface's top.
+SURFACE_HEIGHT_TOLERANCE_M = 0.01
+
+Placed = list[tuple[Shape, np.ndarray]]
+
+
+def check_setup(scene: PlanningScene) -> None:
+    """Raise SetupError if the setup's scene is impossible (see the module's doc)."""
+    setup = scene.setup
+    src = str(setup.source)
+
+    def fail(fld: str, message: str) -> SetupError:
+        return SetupError(message, source=src, field=fld)
+
+    collisions = SceneCollisions(scene)
+    surfaces = scene.surfaces()
+    for i, spec in enumerate(setup.items):
+        where = f"items[{i}]"
+        if spec.container is not None:
+            _check_in_container(scene, spec, src, where)
+            continue
+        if spec.surface not in scene.kitchen.shapes_by_link:
+            raise fail(f"{where}.surface", f"unknown surface {spec.surface!r}; expected "
+                                           f"one of {', '.join(surfaces)}")
+        surf = scene.surface(spec.surface)
+        if (not surf.contains_xy(spec.pose.x, spec.pose.y)
+                or abs(spec.pose.z - surf.top_z) > SURFACE_HEIGHT_TOLERANCE_M):
+            raise fail(f"{where}.pose",
+                       f"item {spec.name!r} at {list(spec.pose.xyz)} is not on "
+                       f"{spec.surface!r}; expected x in [{surf.x_min:.2f}, "
+                       f"{surf.x_max:.2f}], y in [{surf.y_min:.2f}, {surf.y_max:.2f}], "
+                       f"z = {surf.top_z:.2f}")
+        target = spec.target
+        if scene.surface_under(target.x, target.y, target.z,
+                               SURFACE_HEIGHT_TOLERANCE_M) is None:
+            raise fail(f"{where}.target",
+                       f"target of {spec.name!r} at {list(target.xyz)} rests on no "
+                       f"surface (in the air, off the edge or below the floor); expected "
+                       f"z = the top of one of {', '.join(surfaces)} under it")
+    _check_robot_start(scene, collisions, fail)
+    kitchen = [(s, p) for s, p in scene.kitchen_shapes() if s.link != FLOOR_LINK]
+    robot = _robot_parked(scene)
+    starts = {spec.name: _item_at(scene, spec.name, spec.pose) for spec in setup.items}
+    for i, spec in enumerate(setup.items):
+        mine = starts[spec.name]
+        others = [("the environment", kitchen), ("the robot", robot)] + [
+            (repr(name), placed) for name, placed in starts.items() if name != spec.name]
+        for label, placed in others:
+            depth = _deepest(collisions, mine, placed)
+            if depth > PENETRATION_TOLERANCE_M:
+                raise fail(f"items[{i}].pose",
+                           f"item {spec.name!r} starts inside {label} (overlap "
+                           f"{depth * 100:.1f} cm); expected a free spot")
+    _check_targets(scene, collisions, kitchen, fail)
+
+
+def _item_at(scene: PlanningScene, name: str, pose) -> Placed:
+    frame = pose_matrix(pose.xyz, yaw_quat(pose.yaw))
+    return scene.item_shapes(name, frame)
+
+
+def _deepest(collisions: SceneCollisions, a: Placed, b: Placed) -> float:
+    """The deepest penetration between two sets of placed shapes (bounds first)."""
+    deepest = 0.0
+    for sa, pa in a:
+        ca = shape_corners(sa, pa)
+        for sb, pb in b:
+            cb = shape_corners(sb, pb)
+            if np.any(ca.max(axis=0) < cb.min(axis=0)) or np.any(cb.max(axis=0) < ca.min(axis=0)):
+                continue
+            deepest = max(deepest, collisions.depth(sa, pa, sb, pb))
+    return deepest
+
+
+def _robot_parked(scene: PlanningScene) -> Placed:
+    """The robot's shapes at its start with the arms parked (the torso down)."""
+    start = scene.setup.robot_start
+    parked = {k: v for arm in PARK_JOINTS.values() for k, v in arm.items()}
+    frames = scene.link_matrices(list(scene.robot.shapes_by_link), parked,
+                                 (start.x, start.y, start.yaw))
+    return [(shape, frames[link] @ shape.in_link)
+            for link, shapes in scene.robot.shapes_by_link.items() for shape in shapes]
+
+
+def _check_in_container(scene: PlanningScene, spec: ItemSpec, src: str, where: str) -> None:
+    """An item `in:` a container names one of the world's and fits inside it."""
+    container = scene.containers.get(spec.container)
+    if container is None:
+        raise SetupError(f"unknown container {spec.container!r}; expected one of "
+                         f"{', '.join(scene.containers) or 'none (this world has none)'}",
+                         source=src, field=f"{where}.in")
+    local = scene._inside_local(container, spec.pose.xyz, {container.joint: 0.0})
+    ex, ey, ez = scene.items[spec.name].extents
+    c, s = abs(math.cos(spec.pose.yaw)), abs(math.sin(spec.pose.yaw))
+    half_x, half_y = (c * ex + s * ey) / 2, (s * ex + c * ey) / 2
+    if not container.fits(tuple(local), half_x, half_y, ez):
+        (x0, y0, z0), (x1, y1, z1) = container.inside_min, container.inside_max
+        frame = scene.kitchen_frames({container.joint: 0.0})[container.inside_link]
+        bottom = float((frame @ np.array([0.0, 0.0, z0, 1.0]))[2])
+        raise SetupError(
+            f"item {spec.name!r} ({ex:.2f} x {ey:.2f} x {ez:.2f} m) at "
+            f"{list(spec.pose.xyz)} does not fit in {container.name!r}; expected it "
+            f"standing on its bottom (z = {bottom:.2f}), inside {x1 - x0:.2f} x "
+            f"{y1 - y0:.2f} m and at most {z1 - z0:.2f} m tall",
+            source=src, field=f"{where}.pose")
+
+
+def _check_robot_start(scene: PlanningScene, collisions: SceneCollisions, fail) -> None:
+    start = scene.setup.robot_start
+    robot = _robot_parked(scene)
+    points = np.vstack([shape_corners(s, p) for s, p in robot])
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    if FLOOR_LINK in scene.kitchen.shapes_by_link:
+        floor = scene.surface(FLOOR_LINK)
+        if not (floor.contains_xy(lo[0], lo[1]) and floor.contains_xy(hi[0], hi[1])):
+            raise fail("robot.start",
+                       f"the robot at ({start.x:g}, {start.y:g}) is not on the floor of the "
+                       f"kitchen; expected x in [{floor.x_min:.2f}, {floor.x_max:.2f}], y in "
+                       f"[{floor.y_min:.2f}, {floor.y_max:.2f}] with room for the robot")
+    depths = {link: _deepest(collisions, robot, _link_shapes(scene, [link]))
+              for link in scene.kitchen.shapes_by_link if link != FLOOR_LINK}
+    link = max(depths, key=depths.get, default=None)
+    if link is not None and depths[link] > PENETRATION_TOLERANCE_M:
+        raise fail("robot.start",
+                   f"the robot at ({start.x:g}, {start.y:g}) starts inside {link!r} (overlap "
+                   f"{depths[link] * 100:.1f} cm); expected a free spot on the floor")
+    for i, spec in enumerate(scene.setup.items):
+        depth = _deepest(collisions, robot, _item_at(scene, spec.name, spec.pose))
+        if depth > PENETRATION_TOLERANCE_M:
+            raise fail("robot.start",
+                       f"the robot at ({start.x:g}, {start.y:g}) starts inside item "
+                       f"{spec.name!r} (items[{i}]); expected a free spot")
+
+
+def _link_shapes(scene: PlanningScene, links: Iterable[str]) -> Placed:
+    frames = scene.kitchen_frames()
+    return [(s, frames[s.link] @ s.in_link) for link in links
+            for s in scene.kitchen.shapes_by_link[link]]
+
+
+def _check_targets(scene: PlanningScene, collisions: SceneCollisions, kitchen: Placed,
+                   fail) -> None:
+    """Every item at its target is free of the furniture and of the other targets."""
+    setup: Setup = scene.setup
+    at_targets = {spec.name: _item_at(scene, spec.name, spec.target) for spec in setup.items}
+    for i, spec in enumerate(setup.items):
+        mine = at_targets[spec.name]
+        depth = _deepest(collisions, mine, kitchen)
+        if depth > PENETRATION_TOLERANCE_M:
+            raise fail(f"items[{i}].target",
+                       f"target of {spec.name!r} at {list(spec.target.xyz)} is inside the "
+                       f"furniture (overlap {depth * 100:.1f} cm); expected a free spot on a "
+                       "surface")
+        for j, other in enumerate(setup.items[:i]):
+            depth = _deepest(collisions, mine, at_targets[other.name])
+            if depth > PENETRATION_TOLERANCE_M:
+                raise fail(f"items[{i}].target",
+                           f"target of {spec.name!r} overlaps the target of {other.name!r} "
+                           f"(items[{j}]) by {depth * 100:.1f} cm; expected a spot of its own")

@@ -1,0 +1,179 @@
+"""Planning on the planning scene: the robot checked against itself, nothing but the
+process modules touching what executes, and a plan acting on what they report."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cramlite.backends import EXECUTION_CALLS, OBSERVATION_CALLS
+from cramlite.backends.base import ProcessModules
+from cramlite.backends.pybullet import bodies
+from cramlite.backends.pybullet import world as pybullet_world
+from cramlite.designators import (
+    MotionPlanningFailed,
+    MoveArmJointsMotion,
+    ParkArmsAction,
+    simulated_robot,
+)
+from cramlite.trace import read_trace
+from cramlite.trace.check import penetrations
+from cramlite.trial import TrialRunner
+from cramlite.world import load_setup
+from cramlite.world.pr2 import PARK_JOINTS
+from tests.conftest import run_cli
+
+#: The right arm reaching across the chest, the left one parked: the right gripper 9 cm
+#: inside the left shoulder's housing (found by a random search; the scene and the trace
+#: check must both see it).
+ACROSS = {"r_shoulder_pan_joint": 0.53, "r_shoulder_lift_joint": -0.37,
+          "r_upper_arm_roll_joint": -1.55, "r_elbow_flex_joint": -2.17,
+          "r_forearm_roll_joint": 0.1, "r_wrist_flex_joint": -0.85, "r_wrist_roll_joint": 2.53}
+RIGHT = list(ACROSS)
+
+
+def test_a_motion_into_the_robot_itself_is_refused_and_the_trace_check_finds_it(
+        tmp_path: Path) -> None:
+    with simulated_robot(load_setup("v1"), backend="pybullet") as ctx:
+        ParkArmsAction().perform(ctx)
+        check = ctx.collisions.check(RIGHT)
+        goal = np.array([ACROSS[n] for n in RIGHT])
+        contacts = check.contacts(goal)
+        print([c.describe() for c in contacts])
+        assert contacts and all(c.other.startswith("l_") for c in contacts)
+        assert contacts[0].depth_m > 0.05 and "gripper" in contacts[0].what
+        with pytest.raises(MotionPlanningFailed, match="inside l_shoulder_pan_link"):
+            MoveArmJointsMotion(dict(ACROSS)).perform(ctx)
+        now = ctx.scene.joint_positions(RIGHT)
+        assert now == pytest.approx({n: PARK_JOINTS["right"][n] for n in RIGHT})  # not moved
+    # a trace that goes there anyway (written by hand): the check reports the robot itself
+    setup = load_setup("v1")
+    trace = tmp_path / "across.jsonl"
+    with TrialRunner(setup) as runner:
+        result = runner.run("baseline", seed=0, trace=trace)
+    assert result.success
+    recorded = read_trace(trace)
+    joints = recorded.header["joints"]
+    state = dict(recorded.states[-1])
+    q = list(state["q"])
+    for name, value in ACROSS.items():
+        q[joints.index(name)] = value
+    bad = tmp_path / "bad.jsonl"
+    lines = trace.read_text().splitlines()
+    bad.write_text("\n".join([lines[0], lines[-1], json.dumps({**state, "q": q,
+                                                               "t": state["t"] + 1.0})]) + "\n")
+    found = penetrations(read_trace(bad))
+    print([f.describe() for f in found])
+    mutual = [f for f in found if {f.what[:2], f.other[:2]} == {"r_", "l_"}]
+    assert mutual and max(f.depth_m for f in mutual) > 0.05
+    assert all(f.line == 3 or f.between for f in found)  # (the first state was clean)
+    cli = run_cli("replay", str(bad), "--check")
+    assert cli.returncode == 1 and "l_shoulder_pan_link" in cli.stdout
+
+
+class Recording(ProcessModules):
+    """Process modules that record every call made to them (and forward it), and know when
+    an execution call is in progress."""
+
+    def __init__(self, inner: ProcessModules):
+        self.inner = inner
+        self.calls: list[str] = []
+        self.executing = False
+
+    def __getattribute__(self, name):
+        if name in EXECUTION_CALLS | OBSERVATION_CALLS:
+            inner = object.__getattribute__(self, "inner")
+            calls = object.__getattribute__(self, "calls")
+            method = getattr(inner, name)
+
+            def call(*args, **kwargs):
+                calls.append(name)
+                if name not in EXECUTION_CALLS:
+                    return method(*args, **kwargs)
+                self.executing = True
+                try:
+                    return method(*args, **kwargs)
+                finally:
+                    self.executing = False
+            return call
+        return object.__getattribute__(self, name)
+
+    # (the abstract methods, for the ABC: every call goes through __getattribute__)
+    execute_base_trajectory = execute_joint_trajectory = attach = detach = settle = None
+    base_pose = joint_positions = world_joint_positions = object_pose = tool_pose = None
+    release_all = None
+
+
+def test_planning_never_moves_the_world_that_executes(monkeypatch) -> None:
+    """A trial through process modules that record every call: they see only execution
+    and observation calls, and nothing moves a body of the PyBullet world but an execution
+    call in progress."""
+    runner = TrialRunner("c1")
+    recording = Recording(runner.modules)
+    runner.modules = recording
+    outside: list[str] = []
+
+    def guarded(cls, name):
+        original = getattr(cls, name)
+
+        def wrapper(*args, **kwargs):
+            if not recording.executing:
+                outside.append(f"{cls.__name__}.{name}")
+            return original(*args, **kwargs)
+        monkeypatch.setattr(cls, name, wrapper)
+
+    with runner:
+        runner.backend.reset()  # (before the guards: resetting is the runner's, not a plan's)
+        for cls, name in ((bodies.RobotBody, "set_base_pose"),
+                          (bodies.RobotBody, "set_joint_positions"),
+                          (bodies.WorldObject, "set_pose"),
+                          (pybullet_world.World, "set_world_joint"),
+                          (pybullet_world.World, "restore"),
+                          (pybullet_world.World, "step")):
+            guarded(cls, name)
+        monkeypatch.setattr(runner.backend, "reset", lambda poses=None: None)
+        result = runner.run("opm", seed=0)
+    print(result.success, sorted(set(recording.calls)), outside[:5])
+    assert result.success, result.failures
+    assert set(recording.calls) <= EXECUTION_CALLS | OBSERVATION_CALLS
+    assert {"execute_base_trajectory", "execute_joint_trajectory", "attach",
+            "detach"} <= set(recording.calls)
+    assert outside == []
+
+
+def test_a_plan_acts_on_what_the_process_modules_report() -> None:
+    """The cup stands 3 cm off the spot the setup (the scene's first belief) says: the
+    trial grasps it where it is (the gripper's tool frame on the cup's axis, as the
+    simulator has them when the gripper closes) and puts it on its target."""
+    setup = load_setup("v1")
+    with TrialRunner(setup) as runner:
+        real_reset = runner.backend.reset
+        world = runner.world
+
+        def moved_cup(poses=None):
+            real_reset(poses)
+            cup = world.objects["cup"]
+            (x, y, z), orientation = cup.pose()
+            cup.set_pose((x - 0.03, y, z), orientation)
+
+        runner.backend.reset = moved_cup
+        grasps = []
+        real_attach = runner.modules.attach
+
+        def attach(arm, obj):
+            if obj == "cup":
+                tool, _ = world.robot.link_pose(f"{arm[0]}_gripper_tool_frame")
+                axis, _ = world.objects["cup"].pose()
+                grasps.append(float(np.hypot(tool[0] - axis[0], tool[1] - axis[1])))
+            real_attach(arm, obj)
+
+        runner.modules.attach = attach
+        assert runner.scene.initial.poses["cup"][0][0] == pytest.approx(1.45)
+        result = runner.run("baseline", seed=0)
+    print(result.failures, result.items["cup"], grasps)
+    assert result.success, result.failures
+    assert result.items["cup"]["off_target_m"] < 0.02
+    assert grasps and max(grasps) < 0.005  # on the cup as it is, not 3 cm off
