@@ -19,6 +19,7 @@ from cramlite.designators import (
     ParkArmsAction,
     simulated_robot,
 )
+from cramlite.designators.context import scene_collisions
 from cramlite.trace import read_trace
 from cramlite.trace.check import penetrations
 from cramlite.trial import TrialRunner
@@ -177,3 +178,37 @@ def test_a_plan_acts_on_what_the_process_modules_report() -> None:
     assert result.success, result.failures
     assert result.items["cup"]["off_target_m"] < 0.02
     assert grasps and max(grasps) < 0.005  # on the cup as it is, not 3 cm off
+
+
+@pytest.mark.parametrize("trace, what, other, deeper_than", [
+    ("audit-c3-fingertip-in-shoulder.jsonl", "l_gripper_r_finger_tip_link",
+     "r_shoulder_pan_link", 0.08),
+    ("audit-c1-wrist-in-upper-arm.jsonl", "l_upper_arm_link", "r_wrist_flex_link", 0.04)])
+def test_the_audits_self_collisions_are_found_by_both_checks(trace: str, what: str, other: str,
+                                                            deeper_than: float) -> None:
+    """States recorded by cramlite before it checked the robot against itself (an audit
+    found them: a fingertip 8 cm inside the other shoulder closing drawer_2 in c3, a wrist
+    5 cm inside the other upper arm in c1): the trace check reports them, and the planning
+    scene refuses those configurations."""
+    from cramlite.scene import PlanningScene
+
+    recorded = read_trace(Path(__file__).parent / "data" / trace)
+    found = penetrations(recorded)
+    print([f.describe() for f in found])
+    assert any(f.what == what and f.other == other and f.depth_m > deeper_than
+               for f in found)
+    scene = PlanningScene(load_setup(recorded.header["setup"]))
+    collisions = scene_collisions(scene)
+    joints = recorded.header["joints"]
+    worst = max(found, key=lambda f: f.depth_m)
+    state = recorded.states[worst.line - 2]
+    scene.belief.base = tuple(state["base"])
+    names = [n for n in joints if n.startswith(("r_", "l_")) and "gripper" not in n]
+    values = dict(zip(joints, state["q"], strict=True))
+    scene.belief.joints.update(values)
+    check = collisions.check(names, held=[])
+    q = np.array([values[n] for n in names])
+    assert not check.is_free(q)
+    contacts = check.contacts(q)
+    print([c.describe() for c in contacts])
+    assert any({c.what, c.other} == {what, other} for c in contacts)

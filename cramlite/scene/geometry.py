@@ -25,16 +25,20 @@ class PointGrid:
 
     def __init__(self, points: np.ndarray):
         keys = np.floor(points / self.CELL_M).astype(np.int64)
-        order = np.lexsort(keys.T[::-1])
-        self.points, keys = points[order], keys[order]
-        self.keys, starts, counts = np.unique(keys, axis=0, return_index=True,
-                                              return_counts=True)
+        self._origin = keys.min(axis=0) if len(keys) else np.zeros(3, dtype=np.int64)
+        keys -= self._origin
+        dims = keys.max(axis=0) + 1 if len(keys) else np.ones(3, dtype=np.int64)
+        flat = (keys[:, 0] * dims[1] + keys[:, 1]) * dims[2] + keys[:, 2]
+        order = np.argsort(flat, kind="stable")
+        self.points, flat = points[order], flat[order]
+        cells, starts, counts = np.unique(flat, return_index=True, return_counts=True)
+        self.keys = np.column_stack(np.unravel_index(cells, tuple(dims)))
         self.spans = np.column_stack([starts, starts + counts])
-        self.point_cell = np.repeat(np.arange(len(self.keys)), counts)
+        self.point_cell = np.repeat(np.arange(len(cells)), counts)
 
     def within(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-        first = np.floor(lo / self.CELL_M).astype(np.int64)
-        last = np.floor(hi / self.CELL_M).astype(np.int64)
+        first = np.floor(lo / self.CELL_M).astype(np.int64) - self._origin
+        last = np.floor(hi / self.CELL_M).astype(np.int64) - self._origin
         cells = np.all((self.keys >= first) & (self.keys <= last), axis=1)
         chosen = np.flatnonzero(cells)
         if not len(chosen):
@@ -95,19 +99,7 @@ def surface_samples(shape: Shape, spacing: float) -> np.ndarray:
     vertices and points spread over each triangle; a primitive's corners, edges and
     faces."""
     if shape.kind == MESH:
-        tri = shape.vertices[shape.triangles]
-        points = [shape.vertices]
-        for t in tri:
-            longest = max(np.linalg.norm(t[1] - t[0]), np.linalg.norm(t[2] - t[1]),
-                          np.linalg.norm(t[0] - t[2]))
-            n = int(math.ceil(longest / spacing))
-            if n < 2:
-                continue
-            i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
-            keep = (i + j) <= n
-            u, v = i[keep] / n, j[keep] / n
-            points.append(t[0] + u[:, None] * (t[1] - t[0]) + v[:, None] * (t[2] - t[0]))
-        return np.unique(np.round(np.vstack(points), 6), axis=0)
+        return triangle_samples(shape.vertices[shape.triangles], spacing)
     if shape.kind == BOX:
         axes = [np.linspace(-h, h, max(2, int(math.ceil(2 * h / spacing)) + 1))
                 for h in shape.half]
@@ -131,6 +123,26 @@ def surface_samples(shape: Shape, spacing: float) -> np.ndarray:
     phi, theta = np.arccos(1 - 2 * k / n), math.pi * (1 + 5 ** 0.5) * k
     return np.column_stack([r * np.cos(theta) * np.sin(phi), r * np.sin(theta) * np.sin(phi),
                             r * np.cos(phi)]) + shape.centre
+
+
+def triangle_samples(triangles: np.ndarray, spacing: float) -> np.ndarray:
+    """Points over triangles (T x 3 x 3), each covered by a grid of barycentric steps of
+    1/n (n: its longest side over `spacing`), corners included; triangles of one n at
+    once."""
+    sides = np.stack([np.linalg.norm(triangles[:, 1] - triangles[:, 0], axis=1),
+                      np.linalg.norm(triangles[:, 2] - triangles[:, 1], axis=1),
+                      np.linalg.norm(triangles[:, 0] - triangles[:, 2], axis=1)], axis=1)
+    steps = np.maximum(1, np.ceil(sides.max(axis=1) / spacing)).astype(int)
+    out = []
+    for n in np.unique(steps):
+        i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+        keep = (i + j) <= n
+        u, v = i[keep] / n, j[keep] / n  # P
+        group = triangles[steps == n]  # G x 3 x 3
+        a, ab, ac = group[:, 0], group[:, 1] - group[:, 0], group[:, 2] - group[:, 0]
+        out.append((a[:, None] + u[None, :, None] * ab[:, None]
+                    + v[None, :, None] * ac[:, None]).reshape(-1, 3))
+    return np.vstack(out)
 
 
 def point_triangle_distances(points: np.ndarray, vertices: np.ndarray,

@@ -34,6 +34,7 @@ from cramlite.scene.geometry import (
     point_triangle_distances,
     primitive_depth,
     surface_samples,
+    triangle_samples,
     winding_numbers,
 )
 from cramlite.scene.models import BOX, MESH, Shape, item_model, kitchen_model, pr2_model
@@ -85,7 +86,7 @@ class _Body:
             from scipy.spatial import ConvexHull
 
             tri = shape.vertices[shape.triangles]
-            self._dense = PointGrid(np.vstack([_triangle_points(t) for t in tri]))
+            self._dense = PointGrid(triangle_samples(tri, SPACING_M))
             edges = {tuple(sorted(e)) for t in shape.triangles.tolist()
                      for e in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
             self._sparse = PointGrid(np.vstack([shape.vertices] + [
@@ -129,17 +130,6 @@ class _Body:
             points = self.points
         keep = np.all((points >= lo - 1e-9) & (points <= hi + 1e-9), axis=1)
         return points[keep]
-
-
-def _triangle_points(t: np.ndarray) -> np.ndarray:
-    """Points over a triangle (its corners included) at most about SPACING_M apart."""
-    longest = max(np.linalg.norm(t[1] - t[0]), np.linalg.norm(t[2] - t[1]),
-                  np.linalg.norm(t[0] - t[2]))
-    n = max(1, int(math.ceil(longest / SPACING_M)))
-    i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
-    keep = (i + j) <= n
-    u, v = i[keep] / n, j[keep] / n
-    return t[0] + u[:, None] * (t[1] - t[0]) + v[:, None] * (t[2] - t[0])
 
 
 def _segment_points(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -211,8 +201,10 @@ def depth_inside(points: np.ndarray, other: _Body, other_placement: np.ndarray,
         return 0.0
     estimate = other.voxel_depths(local)
     # a point whose voxel's centre is less deep than this cannot be deeper than the
-    # tolerance: it is not measured exactly
-    maybe = local[estimate > tolerance_m - VOXEL_HALF_DIAGONAL_M]
+    # tolerance, nor than the deepest voxel's points: it is not measured exactly
+    floor = max(tolerance_m - VOXEL_HALF_DIAGONAL_M,
+                float(estimate.max()) - 2 * VOXEL_HALF_DIAGONAL_M)
+    maybe = local[estimate > floor]
     if not len(maybe):
         return float(max(0.0, estimate.max()))
     inside = np.abs(winding_numbers(maybe, shape.vertices, shape.triangles)) > 0.5
