@@ -39,6 +39,8 @@ def inside(folder: str | Path, name: str) -> Path:
     return path
 
 
-def trial_stem(setup: object, plan: object, strategy: object, trial: object) -> str:
-    """The stem of a trial's files (its trace, its timeline and replay in the report)."""
-    return safe_stem(setup, plan, strategy, trial)
+def trial_stem(setup: object, plan: object, strategy: object, trial: object,
+               backend: object = "") -> str:
+    """The stem of a trial's files (its trace, its timeline and replay in the report); the
+    backend is part of it where a bench ran on several."""
+    return safe_stem(setup, plan, strategy, trial, *([backend] if backend else []))

@@ -44,10 +44,15 @@ class TrialResult:
     failures: list[dict[str, Any]]
     base_path_m: float  #: length of the base paths actually driven
     straight_line_m: float  #: sum of straight xy legs robot -> item -> goal
-    wall_s: float  #: planning + execution wall time (world loading excluded)
+    wall_s: float  #: the host's compute time: planning and executing (loading excluded)
     drive_s: float  #: robot time of the executed base trajectories
     arm_s: float  #: robot time of the executed arm, torso and gripper trajectories
-    robot_time_s: float  #: wall_s + drive_s + arm_s
+    #: The simulated robot's time from the plan's start to the end of its last motion (the
+    #: trace's last t): deterministic for a seed, no host time in it.
+    robot_time_s: float
+    #: robot_time_s + wall_s: the time of a robot that plans between its motions.
+    task_time_s: float = 0.0
+    backend: str = ""  #: what executed the trial (see cramlite.backends)
     #: Robot time spent opening and closing drawers and doors (part of drive_s + arm_s).
     open_close_s: float = 0.0
     items: dict[str, dict[str, Any]] = field(default_factory=dict)
@@ -106,7 +111,8 @@ class TrialRunner:
                            rng=np.random.default_rng([seed, 0]), options=self.options)
         ctx.observe()  # (the scene's first belief: what the process modules report)
         if trace is not None:
-            ctx.open_trace(trace, self.setup_reference(), plan, strategy, seed)
+            ctx.open_trace(trace, self.setup_reference(), plan, strategy, seed,
+                           self.backend.name)
         try:
             start = time.perf_counter()
             report = PLANS[plan](ctx, self.setup, chooser)
@@ -122,7 +128,8 @@ class TrialRunner:
             order=report.order, failures=[f.as_dict() for f in report.failures],
             base_path_m=round(ctx.base_path_m, 6), straight_line_m=round(report.straight_line_m, 6),
             wall_s=wall_s, drive_s=round(ctx.drive_s, 6), arm_s=round(ctx.arm_s, 6),
-            robot_time_s=wall_s + ctx.drive_s + ctx.arm_s, items=items,
+            robot_time_s=round(ctx.time_s, 6), task_time_s=round(ctx.time_s + wall_s, 6),
+            backend=self.backend.name, items=items,
             open_close_s=round(time_in(actions, ("OpenAction", "CloseAction")), 6),
             actions=actions, driven_path=self._driven_path(ctx), arm_motions=ctx.arm_motions,
             planned_arm_motions=ctx.planned_motions, log=ctx.log)

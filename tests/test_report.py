@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 from cramlite.bench.lock import FolderLock
-from cramlite.safe_names import safe_stem, trial_stem
+from cramlite.report.trials import trial_id
+from cramlite.safe_names import safe_stem
 from cramlite.trace.path import simplify_path
 from tests.conftest import ROOT
 
@@ -94,7 +95,7 @@ def test_page_shows_every_setup_strategy_order_and_failure_offline(bench_dir: Pa
         assert f"report/map-{safe_stem(setup)}.png" in page.images
     plain = " ".join(page.text)
     for row in rows(bench_dir):
-        trial = trial_stem(row["setup"], row["plan"], row["strategy"], row["trial"])
+        trial = trial_id(row)
         assert f"trial-{trial}" in page.ids  # first trial of each setup and strategy
         assert f"report/timeline-{trial}.png" in page.images
         numbered = " → ".join(f"{k}\xa0{n}" for k, n in enumerate(row["order"].split(), 1))

@@ -24,11 +24,11 @@ FIXED_ORDER = "fixed-order"
 
 
 def trace_file(folder: str | Path, setup: str, plan: str, strategy: str, trial: int | str,
-               ) -> str:
+               backend: str = "") -> str:
     """Where a bench writes a trial's trace: `folder/SLUG-HASH.jsonl`, a name made safe
-    from the setup, plan, strategy and index (a strategy `learned:../nn.model` stays in
-    the folder, and no two trials share a file)."""
-    return str(inside(folder, trial_stem(setup, plan, strategy, trial) + ".jsonl"))
+    from the setup, plan, strategy, index and backend (a strategy `learned:../nn.model`
+    stays in the folder, and no two trials share a file)."""
+    return str(inside(folder, trial_stem(setup, plan, strategy, trial, backend) + ".jsonl"))
 
 
 def trial_seed(batch_seed: int, setup_name: str, trial: int) -> int:
@@ -50,14 +50,17 @@ class TrialSpec:
     given_order: tuple[str, ...] = ()
     #: content hash of the setup (file and URDFs): the worker refuses a file that changed
     setup_hash: str = ""
-    #: Write the trial's trace (cramlite-trace/1) to this file ("" = no trace).
+    #: Write the trial's trace (cramlite-trace/2) to this file ("" = no trace).
     trace: str = ""
+    #: What executes the trial (see cramlite.backends).
+    backend: str = "pybullet"
 
     @property
     def key(self) -> tuple[str, ...]:
         """Identity of a trial in a results file (used to resume)."""
         return (self.setup, self.setup_hash, self.plan, self.strategy,
-                " ".join(self.given_order), str(self.trial), str(self.batch_seed))
+                " ".join(self.given_order), self.backend, str(self.trial),
+                str(self.batch_seed))
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -83,38 +86,47 @@ class BatchPlan:
     all_orders: bool = False
     #: Folder for the trials' traces ("" = no traces): see `trace_file`.
     trace_dir: str = ""
+    #: What executes the trials: each trial runs on every one of them.
+    backends: Sequence[str] = ("pybullet",)
 
-    def _trace(self, setup: str, strategy: str, trial: int) -> str:
-        return trace_file(self.trace_dir, setup, self.plan, strategy, trial) \
-            if self.trace_dir else ""
+    def _trace(self, setup: str, strategy: str, trial: int, backend: str) -> str:
+        if not self.trace_dir:
+            return ""
+        return trace_file(self.trace_dir, setup, self.plan, strategy, trial,
+                          backend if len(self.backends) > 1 else "")
 
     def total(self) -> int:
         per_setup = self.trials * len(self.strategies)
         orders = sum(math.factorial(len(s.items)) for s in self.setups.values()) \
             if self.all_orders else 0
-        return per_setup * len(self.setups) + orders
+        return (per_setup * len(self.setups) + orders) * len(self.backends)
 
     def __iter__(self) -> Iterator[TrialSpec]:
         for name, entry in self.setups.items():
             for trial in range(self.trials):
                 seed = trial_seed(self.batch_seed, name, trial)
                 for strategy in self.strategies:
-                    yield TrialSpec(name, entry.path, strategy, trial, seed, self.batch_seed,
-                                    self.plan, (), entry.content_hash,
-                                    self._trace(name, strategy, trial))
+                    for backend in self.backends:
+                        yield TrialSpec(name, entry.path, strategy, trial, seed,
+                                        self.batch_seed, self.plan, (), entry.content_hash,
+                                        self._trace(name, strategy, trial, backend), backend)
             if self.all_orders:
                 for index, order in enumerate(itertools.permutations(entry.items)):
-                    yield TrialSpec(name, entry.path, FIXED_ORDER, index,
-                                    trial_seed(self.batch_seed, name, index), self.batch_seed,
-                                    self.plan, tuple(order), entry.content_hash,
-                                    self._trace(name, FIXED_ORDER, index))
+                    for backend in self.backends:
+                        yield TrialSpec(name, entry.path, FIXED_ORDER, index,
+                                        trial_seed(self.batch_seed, name, index),
+                                        self.batch_seed, self.plan, tuple(order),
+                                        entry.content_hash,
+                                        self._trace(name, FIXED_ORDER, index, backend),
+                                        backend)
 
     def contains(self, key: Sequence[str]) -> bool:
         """Whether a results row's key (see `TrialSpec.key`) is one of this batch's trials."""
-        setup, setup_hash, plan, strategy, given, trial, batch_seed = key
+        setup, setup_hash, plan, strategy, given, backend, trial, batch_seed = key
         entry = self.setups.get(setup)
         if entry is None or entry.content_hash != setup_hash or plan != self.plan \
-                or batch_seed != str(self.batch_seed) or not trial.isdigit():
+                or batch_seed != str(self.batch_seed) or not trial.isdigit() \
+                or backend not in self.backends:
             return False
         if strategy == FIXED_ORDER:
             return (self.all_orders and int(trial) < math.factorial(len(entry.items))

@@ -26,14 +26,18 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-COLUMNS = ["setup", "setup_hash", "plan", "strategy", "given_order", "trial", "seed",
-           "batch_seed", "success", "order", "failures", "failure_types", "base_path_m",
-           "straight_line_m", "wall_s", "drive_s", "arm_s", "open_close_s", "robot_time_s",
-           "items", "actions", "driven_path", "error_type", "error", "worker"]
-#: Columns that measure time or place, and so differ between identical runs.
-TIMING_COLUMNS = ("wall_s", "robot_time_s", "worker")
-KEY_COLUMNS = ("setup", "setup_hash", "plan", "strategy", "given_order", "trial",
+COLUMNS = ["setup", "setup_hash", "plan", "strategy", "given_order", "backend", "trial",
+           "seed", "batch_seed", "success", "order", "failures", "failure_types",
+           "base_path_m", "straight_line_m", "wall_s", "drive_s", "arm_s", "open_close_s",
+           "robot_time_s", "task_time_s", "items", "actions", "driven_path", "error_type",
+           "error", "worker"]
+#: Columns that measure the host's time or place, and so differ between identical runs.
+TIMING_COLUMNS = ("wall_s", "task_time_s", "worker")
+KEY_COLUMNS = ("setup", "setup_hash", "plan", "strategy", "given_order", "backend", "trial",
                "batch_seed")
+#: What the columns mean (DEFINITIONS: robot_time_s is the robot's own time from 2 on; in
+#: 1 it was wall + driving + arm time). A folder of another format is not resumed into.
+RESULTS_FORMAT = 2
 #: Rows are synced to disk at most this often (seconds); each is written whole anyway.
 SYNC_INTERVAL_S = 1.0
 
@@ -75,6 +79,13 @@ class TrialStore:
         name with other content (setup name -> this batch's content hash)."""
         if not self.path.exists() or self.path.stat().st_size == 0:
             return
+        found = self.results_format()
+        if found != RESULTS_FORMAT:
+            raise StoreMismatch(f"{self.folder} holds results of format {found} (written by "
+                                "an earlier cramlite, where robot_time_s included the wall "
+                                f"time); this cramlite writes format {RESULTS_FORMAT}; "
+                                "expected a new --out folder (`cramlite report` still shows "
+                                "the old one)")
         with self.path.open(newline="") as handle:
             header = next(csv.reader(handle), [])
         if header != COLUMNS:
@@ -121,15 +132,25 @@ class TrialStore:
         finally:
             os.close(fd)
 
+    def results_format(self) -> int:
+        """The format of the results in the folder (1: before it was recorded)."""
+        meta = self.folder / "metadata.json"
+        try:
+            value = json.loads(meta.read_text(encoding="utf-8")).get("results_format", 1)
+        except (OSError, ValueError, AttributeError):
+            return 1
+        return value if isinstance(value, int) else 1
+
     def write_metadata(self, args: dict[str, Any], executor: str) -> None:
         versions = {}
-        for package in ("cramlite", "pybullet", "pin", "ompl", "numpy", "scipy",
-                        "example-robot-data", "dask", "distributed"):
+        for package in ("cramlite", "pybullet", "mujoco", "pin", "coal", "ompl", "numpy",
+                        "scipy", "example-robot-data", "dask", "distributed"):
             try:
                 versions[package] = metadata.version(package)
             except metadata.PackageNotFoundError:
                 continue
-        data = {"written": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "python": sys.version,
+        data = {"results_format": RESULTS_FORMAT,
+                "written": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "python": sys.version,
                 "platform": platform.platform(), "host": platform.node(), "executor": executor,
                 "versions": versions, "arguments": args}
         runs = []

@@ -1,8 +1,8 @@
 """Batch summary: per setup and strategy, and paired tests OPM vs baseline (scipy).
 
-Columns: trials, success rate, mean/median wall time, robot time (wall + driving + arm
-motion, from the executed trajectories), driven base path, straight-line legs, driving and
-arm time, the most frequent fetch order and
+Columns: trials, success rate, robot time (the robot's own time: driving and arm motion,
+from the executed trajectories), mean/median wall time (the host's computing), driven
+base path, straight-line legs, driving and arm time, the most frequent fetch order and
 its normalised edit distance to the setup's baseline order.
 """
 
@@ -58,6 +58,18 @@ def summarise(rows: Sequence[dict[str, Any]], baseline_orders: dict[str, Sequenc
         entry["edit_vs_baseline"] = (edit_distance(order.split(), list(baseline))
                                      if order and baseline else float("nan"))
         out.append(entry)
+    return out
+
+
+def reference_tests(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The paired tests of every strategy against baseline (on each backend: a strategy
+    labelled `opm@kinematic` against `baseline@kinematic`); none without baseline."""
+    labels = sorted({r["strategy"] for r in rows} - {FIXED_ORDER})
+    out = []
+    for reference in (s for s in labels if s.split("@")[0] == "baseline"):
+        backend = reference.split("@")[1:]
+        out += [paired_tests(rows, s, reference) for s in labels
+                if s.split("@")[0] != "baseline" and s.split("@")[1:] == backend]
     return out
 
 
@@ -148,10 +160,12 @@ def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[
     lines.append("")
     lines.append("Driven path: length of the base paths actually executed. Straight-line: sum "
                  "over steps of the xy distances robot -> item -> where it was put. Robot time: "
-                 "wall time + driving time (base trajectories at 1.0 m/s, 1 rad/s) + arm time "
-                 "(arm, torso and gripper trajectories timed from the URDF's limits); "
-                 "open/close: the part of it spent opening and closing drawers and doors. "
-                 "Times and lengths are of the successful trials (–: none succeeded).")
+                 "the robot's own time, from the plan's start to the end of its last motion "
+                 "(base trajectories at 1.0 m/s, 1 rad/s; arm, torso and gripper "
+                 "trajectories timed from the URDF's limits), deterministic for a seed; "
+                 "wall: the host's time to plan and execute it. open/close: the part of the "
+                 "robot time spent opening and closing drawers and doors. Times and lengths "
+                 "are of the successful trials (–: none succeeded).")
     for test in tests:
         lines += ["", f"Wilcoxon signed-rank, {test['strategy']} vs {test['reference']} "
                       f"({test['pairs']} pairs by setup and trial):"]

@@ -73,10 +73,10 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
 
     start = time.perf_counter()
     try:
-        cache_key = (spec.setup_path, spec.setup_hash)
+        cache_key = (spec.setup_path, spec.setup_hash, spec.backend)
         runner = _RUNNERS.get(cache_key)
         if runner is None:
-            runner = TrialRunner(spec.setup_path)
+            runner = TrialRunner(spec.setup_path, backend=spec.backend)
             if spec.setup_hash and runner.setup.content_hash != spec.setup_hash:
                 runner.close()
                 row.update(success=False, error_type="SetupChanged",
@@ -99,6 +99,7 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
                base_path_m=result.base_path_m, straight_line_m=result.straight_line_m,
                wall_s=result.wall_s, drive_s=result.drive_s, arm_s=result.arm_s,
                open_close_s=result.open_close_s, robot_time_s=result.robot_time_s,
+               task_time_s=result.task_time_s,
                items=json.dumps(result.items),
                actions=json.dumps(actions_only(result.actions), separators=(",", ":")),
                driven_path=json.dumps(result.driven_path, separators=(",", ":")))
@@ -108,9 +109,11 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
 def base_row(spec: TrialSpec) -> dict[str, Any]:
     return {"setup": spec.setup, "setup_hash": spec.setup_hash, "plan": spec.plan,
             "strategy": spec.strategy, "given_order": " ".join(spec.given_order),
+            "backend": spec.backend,
             "trial": spec.trial, "seed": spec.seed, "batch_seed": spec.batch_seed,
             "success": False, "order": "", "failures": "[]", "failure_types": "",
             "base_path_m": "", "straight_line_m": "", "wall_s": "", "drive_s": "", "arm_s": "",
-            "open_close_s": "", "robot_time_s": "", "items": "{}", "actions": "[]",
+            "open_close_s": "", "robot_time_s": "", "task_time_s": "", "items": "{}",
+            "actions": "[]",
             "driven_path": "[]",
             "error_type": "", "error": "", "worker": worker_name()}

@@ -6,6 +6,7 @@ import argparse
 import os
 
 from cramlite.cli.common import (
+    BACKEND_HELP,
     EXIT_OK,
     EXIT_PLAN_FAILED,
     comma_list,
@@ -46,6 +47,23 @@ def _strategies(text: str) -> list[str]:
                                  f"{', '.join(available_strategies())} or module:Class",
                                  field="--strategies") from None
     return strategies
+
+
+def _backends(args: argparse.Namespace) -> list[str]:
+    """--backend NAME or --backends A,B (each checked: installed here), or the default."""
+    from cramlite.cli.common import chosen_backend
+
+    if args.backend and args.backends_list:
+        raise UserInputError("give --backend or --backends, not both", field="--backends")
+    names = comma_list(args.backends_list) if args.backends_list else [args.backend]
+    out = []
+    for name in names:
+        backend = chosen_backend(name)
+        if backend in out:
+            raise UserInputError(f"{backend!r} is listed twice; expected each backend once",
+                                 field="--backends")
+        out.append(backend)
+    return out
 
 
 def _setups(text: str) -> dict:
@@ -123,6 +141,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
             raise UserInputError("the dask executor needs Dask: pip install 'cramlite[dask]'",
                                  field="--executor") from None
     strategies = _strategies(args.strategies)
+    args.backends = _backends(args)
     workers = _workers(args)
     setups = _setups(args.setups)
     if not setups and not args.random_setups:
@@ -148,7 +167,12 @@ def _run(args, strategies, setups, workers, out) -> int:
     from cramlite.bench.random_setups import generate_setups
     from cramlite.bench.specs import BatchPlan, SetupEntry
     from cramlite.bench.store import StoreMismatch, TrialStore, row_key
-    from cramlite.bench.summary import order_percentiles, paired_tests, summarise, write_summary
+    from cramlite.bench.summary import (
+        order_percentiles,
+        reference_tests,
+        summarise,
+        write_summary,
+    )
     from cramlite.world.setup import load_setup
 
     store = TrialStore(out)
@@ -166,12 +190,13 @@ def _run(args, strategies, setups, workers, out) -> int:
     plan = BatchPlan({n: SetupEntry(str(s.source), s.content_hash, tuple(s.baseline_order))
                       for n, s in setups.items()}, strategies, args.trials, args.seed,
                      args.plan, args.all_orders,
-                     str(out / "traces") if args.traces else "")
+                     str(out / "traces") if args.traces else "", tuple(args.backends))
     done = {key for key in store.done_keys() if plan.contains(key)}
     total = plan.total()
     store.write_metadata({k: v for k, v in vars(args).items() if k != "func"}, args.executor)
     where = (f"Dask scheduler {args.scheduler}" if args.scheduler
              else f"{workers} worker(s), executor {args.executor}")
+    where += f", backend {', '.join(args.backends)}"
     progress = Progress(total - len(done), already=len(done))
     progress.say(f"{total} trials ({len(done)} already in {store.path}), {where}, trial "
                  f"timeout {args.trial_timeout:g} s")
@@ -199,9 +224,11 @@ def _run(args, strategies, setups, workers, out) -> int:
                      f"of {total} trials are in {store.path}. Run the same command again to "
                      f"finish the rest (`cramlite report {out}` shows what is there).")
         return EXIT_TERMINATED if outcome.stopped_now else 130
+    from cramlite.bench.labels import by_backend
+
+    rows = by_backend(rows)  # (several backends: each strategy labelled with its own)
     summary = summarise(rows, {n: s.baseline_order for n, s in setups.items()})
-    tests = [paired_tests(rows, s) for s in strategies if s != "baseline"] \
-        if "baseline" in strategies else []
+    tests = reference_tests(rows)
     text = write_summary(out, summary, tests, order_percentiles(rows) if args.all_orders else [])
     from cramlite.bench.plots import write_plots
 
@@ -272,6 +299,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="add N random setups (saved under OUT/setups)")
     bench.add_argument("--plan", default="set-table", choices=PLAN_NAMES,
                        help="which plan (default set-table)")
+    bench.add_argument("--backend", help=BACKEND_HELP)
+    bench.add_argument("--backends", dest="backends_list", metavar="A,B",
+                       help="run every trial on each of these backends (the report puts "
+                            "them side by side)")
     bench.add_argument("--out", default="results", help="results folder (default results)")
     bench.add_argument("--no-plots", action="store_true",
                        help="skip the PNG plots (and the report's pictures and replays: it "

@@ -46,6 +46,18 @@ def command_help(name: str) -> str:
     return COMMANDS[name][1]
 
 
+BACKEND_HELP = ("what executes (and draws) it: pybullet, kinematic, recording or a "
+                "plugin's (default: pybullet if it is installed, else mujoco if it is, "
+                "else kinematic)")
+
+
+def chosen_backend(name: str | None) -> str:
+    """The backend asked for (checked: installed here), or the default one."""
+    from cramlite.backends import check_backend, default_backend
+
+    return check_backend(name) if name else default_backend()
+
+
 class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, exit 2, as for every user mistake
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")

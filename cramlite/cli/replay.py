@@ -6,9 +6,11 @@ import argparse
 import sys
 
 from cramlite.cli.common import (
+    BACKEND_HELP,
     EXIT_OK,
     EXIT_PLAN_FAILED,
     Parser,
+    chosen_backend,
     command_help,
     writable_file,
 )
@@ -49,6 +51,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
                              field="--out")
     if args.out:
         writable_file(args.out, "--out")
+    backend = chosen_backend(args.backend)
+    if args.gui and backend != "pybullet":
+        raise UserInputError(f"the {backend} backend has no GUI; expected --backend pybullet "
+                             "with --gui", field="--gui")
     status = EXIT_OK
     if args.check:
         from cramlite.trace.replay import penetrations
@@ -69,9 +75,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
         with tqdm(total=total, desc="frames", disable=not sys.stderr.isatty(),
                   leave=False) as bar:
             frames = render_gif(trace, args.out, args.fps, args.speed, args.width, args.height,
-                                progress=bar.update)
+                                progress=bar.update, backend=backend)
         print(f"wrote {args.out}: {frames} frames, {trace.duration_s:.1f} s of robot time at "
-              f"{args.fps:g} fps, speed x{args.speed:g}")
+              f"{args.fps:g} fps, speed x{args.speed:g} (drawn as the {backend} backend "
+              "draws)")
     if args.gui:
         from cramlite.trace.replay import replay_gui
 
@@ -89,7 +96,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "found a penetration, 2: bad input (a malformed trace names its line).")
     replay.add_argument("trace", help="a trace file written by `cramlite run --trace` or "
                                       "`cramlite bench --traces`")
-    replay.add_argument("--out", help="write an animated GIF here (headless, TinyRenderer)")
+    replay.add_argument("--out", help="write an animated GIF here (headless)")
+    replay.add_argument("--backend", help="whose renderer draws the GIF (and whose window "
+                                          "--gui opens): " + BACKEND_HELP)
     replay.add_argument("--fps", type=positive_float, default=10.0,
                         help="frames per second of robot time (default 10)")
     replay.add_argument("--speed", type=positive_float, default=1.0,
@@ -101,8 +110,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         help="play it in the PyBullet window (needs a display)")
     replay.add_argument("--check", action="store_true",
                         help="re-check every state and the motion between them: no robot "
-                             "link, held object or standing item inside the kitchen or "
-                             "another item")
+                             "link inside the kitchen, an item or the robot itself, no held "
+                             "or standing item inside the kitchen or another item (the real "
+                             "meshes; independent of the planner's check)")
     replay.add_argument("--tolerance-cm", type=positive_float, default=1.0,
-                        help="penetration allowed by --check (default 1 cm: convex hulls)")
+                        help="penetration allowed by --check (default 1 cm)")
     replay.set_defaults(func=cmd_replay)

@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 
 from cramlite.cli.common import (
+    BACKEND_HELP,
     EXIT_OK,
     EXIT_PLAN_FAILED,
+    chosen_backend,
     command_help,
     image_path,
     int_in_range,
@@ -19,15 +21,16 @@ from cramlite.errors import UserInputError
 from cramlite.plan_names import PLAN_NAMES
 from cramlite.strategies.cost import DIMS
 
-#: Largest image side `show` renders (TinyRenderer takes ~1 s per 10 megapixels).
+#: Largest image side `show` renders (either renderer takes about a second per megapixel
+#: or ten).
 MAX_IMAGE_SIDE = 4096
 
 
 def _save_image(image, path: str, option: str) -> str:
-    from cramlite.backends.pybullet.render import save_png
+    from cramlite.render import save_image
 
     try:
-        return str(save_png(image, path))
+        return str(save_image(image, path))
     except (OSError, ValueError) as exc:
         reason = getattr(exc, "strerror", None) or str(exc)
         raise UserInputError(f"cannot write the image ({reason})", source=path,
@@ -43,13 +46,13 @@ def cmd_show(args: argparse.Namespace) -> int:
     check_setup(PlanningScene(setup))
     if args.top:
         return _show_top(setup, args)
-    from cramlite.backends.pybullet.render import render_labelled
-    from cramlite.backends.pybullet.world import World
+    from cramlite.render import draw_setup
 
+    backend = chosen_backend(args.backend)
     out = args.out or f"{setup.name}.png"
-    with World.from_setup(setup) as world:
-        path = _save_image(render_labelled(world, args.width, args.height), out, "--out")
-    print(f"wrote {path} ({setup.name}: {len(setup.items)} items)")
+    path = _save_image(draw_setup(setup, args.width, args.height, backend), out, "--out")
+    print(f"wrote {path} ({setup.name}: {len(setup.items)} items; drawn as the {backend} "
+          "backend draws)")
     return EXIT_OK
 
 
@@ -90,8 +93,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     from cramlite.designators.context import ExecutionOptions
 
     options = ExecutionOptions(keep_containers_open=args.keep_open)
+    backend = chosen_backend(args.backend)
     try:
-        runner = TrialRunner(setup, gui=args.gui, options=options)
+        runner = TrialRunner(setup, gui=args.gui, options=options, backend=backend)
     except RuntimeError as exc:  # no display for --gui
         raise UserInputError(str(exc), field="--gui") from None
     with runner:
@@ -101,9 +105,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         except StrategyError as exc:  # e.g. optimal with too many items, a broken plugin
             raise UserInputError(str(exc), field="--strategy") from None
         if args.image:
-            from cramlite.backends.pybullet.render import render
-
-            _save_image(render(runner.world), args.image, "--image")
+            _save_image(_final_image(runner, backend), args.image, "--image")
     if args.json:
         data = result.as_dict()
         if not args.log:
@@ -111,14 +113,14 @@ def cmd_run(args: argparse.Namespace) -> int:
         print(json.dumps(data))
     else:
         status = "success" if result.success else "FAILED"
-        print(f"{result.setup} {result.plan} with {result.strategy} (seed {result.seed}): {status}")
+        print(f"{result.setup} {result.plan} with {result.strategy} (seed {result.seed}) on "
+              f"{result.backend}: {status}")
         print(f"  order: {', '.join(result.order)}")
         print(f"  driven base path {result.base_path_m:.2f} m, straight-line legs "
               f"{result.straight_line_m:.2f} m")
-        print(f"  robot time {result.robot_time_s:.2f} s = wall {result.wall_s:.2f} s + driving "
-              f"{result.drive_s:.2f} s + arm {result.arm_s:.2f} s "
-              f"({result.planned_arm_motions} of {result.arm_motions} arm motions planned "
-              "around obstacles)")
+        print(f"  robot time {result.robot_time_s:.2f} s (driving {result.drive_s:.2f} s, arm "
+              f"{result.arm_s:.2f} s; {result.planned_arm_motions} of {result.arm_motions} "
+              f"arm motions planned around obstacles); computing {result.wall_s:.2f} s")
         if result.open_close_s:
             print(f"  opening and closing drawers and doors took {result.open_close_s:.2f} s of "
                   "that")
@@ -130,6 +132,18 @@ def cmd_run(args: argparse.Namespace) -> int:
             for line in result.log:
                 print(f"  log: {line}")
     return EXIT_OK if result.success else EXIT_PLAN_FAILED
+
+
+def _final_image(runner, backend: str):
+    """A picture of the world after the trial (as the backend draws)."""
+    from cramlite.render import SHOW_CAMERA, camera, scene_image, uses_pybullet
+
+    if uses_pybullet(backend):
+        from cramlite.backends.pybullet.render import render
+
+        return render(runner.world)
+    runner.scene.observe(runner.modules)
+    return scene_image(runner.scene, 1024, 768, camera(SHOW_CAMERA, SHOW_CAMERA))
 
 
 def _setup_help() -> str:
@@ -145,7 +159,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     show = sub.add_parser("show", help=command_help("show"),
                           description="Loads and checks a setup (every mistake is reported as "
                                       "FILE: FIELD: what was expected, exit code 2) and draws "
-                                      "it with PyBullet's TinyRenderer, no display needed: "
+                                      "it headless (PyBullet's TinyRenderer for the pybullet "
+                                      "backend, cramlite's own renderer for the others): "
                                       "each item labelled, each target marked (red square) "
                                       "and the robot's start (blue ring). --top draws the "
                                       "kitchen from above instead (matplotlib).")
@@ -157,6 +172,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                       help=f"image width in pixels, 1-{MAX_IMAGE_SIDE} (default 1024)")
     show.add_argument("--height", type=side, default=768,
                       help=f"image height in pixels, 1-{MAX_IMAGE_SIDE} (default 768)")
+    show.add_argument("--backend", help=BACKEND_HELP)
     show.add_argument("--top", action="store_true",
                       help="draw the top-down map instead: furniture, drawers and cupboard, "
                            "the robot's start, each item's start spot and target, labelled "
@@ -183,11 +199,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--keep-open", action="store_true",
                      help="leave the drawers and doors the robot opens open until the plan "
                           "ends (default: each is closed as soon as its item is out or in)")
-    run.add_argument("--gui", action="store_true", help="show the PyBullet GUI (needs a display)")
+    run.add_argument("--backend", help=BACKEND_HELP)
+    run.add_argument("--gui", action="store_true",
+                     help="show the PyBullet GUI (the pybullet backend; needs a display)")
     run.add_argument("--json", action="store_true", help="print one JSON object")
     run.add_argument("--log", action="store_true", help="also print what the plan did")
     run.add_argument("--image", type=image_path,
                      help="write an image of the scene after the trial (.png, .jpg, ...)")
     run.add_argument("--trace", help="write every executed state to this JSON Lines file "
-                                     "(cramlite-trace/1; `cramlite replay` shows it)")
+                                     "(cramlite-trace/2; `cramlite replay` shows it)")
     run.set_defaults(func=cmd_run)

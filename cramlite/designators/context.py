@@ -258,13 +258,26 @@ class RobotContext:
                                {h.obj: arm for arm, h in self.holding.items()}, objects,
                                self.tasks.current_action())
 
-    def trace_header(self, setup: str, plan: str, strategy: str, seed: int) -> dict[str, Any]:
+    def trace_header(self, setup: str, plan: str, strategy: str, seed: int,
+                     backend: str = "") -> dict[str, Any]:
+        from cramlite import __version__
+        from cramlite.scene.models import file_digest
+
+        robot = self.scene.robot
         return {"setup": setup, "plan": plan, "strategy": strategy, "seed": seed,
-                "joints": self.trace_joints, "world_joints": list(self.scene.kitchen.joints)}
+                "joints": self.trace_joints, "world_joints": list(self.scene.kitchen.joints),
+                "backend": backend, "cramlite": __version__,
+                "robot": {"urdf": str(robot.urdf), "sha256": file_digest(robot.urdf),
+                          "joint_limits": {n: [j.lower if math.isfinite(j.lower) else None,
+                                               j.upper if math.isfinite(j.upper) else None,
+                                               j.velocity]
+                                           for n, j in robot.joints.items()
+                                           if n in self.trace_joints}}}
 
     def open_trace(self, path: str | Path, setup: str, plan: str, strategy: str,
-                   seed: int) -> TraceWriter:
-        self.trace = TraceWriter(path, self.trace_header(setup, plan, strategy, seed))
+                   seed: int, backend: str = "") -> TraceWriter:
+        self.trace = TraceWriter(path, self.trace_header(setup, plan, strategy, seed,
+                                                         backend))
         self.record_state(0.0)
         return self.trace
 

@@ -190,9 +190,16 @@ class CostmapLocation:
         # keep the torso where it is (it moves at 1.3 cm/s); if that is out of reach or
         # collides, and the torso is not at the table-setting height, let it move there
         keep = [torso] + ([None] if abs(torso - TORSO_UP_M) > 0.01 else [])
-        for index, fixed in enumerate(keep):
-            solved = self._solve(ctx, arm, grasp, base, fixed, poses)
-            last = index == len(keep) - 1
+        # the last solution's joints seed the solve (it converges in a few steps, near the
+        # robot's way of reaching); if that solution is in the way of something, a solve
+        # from the reaching start (elbow in, clear of tables) may not be
+        seed = ctx.ik_seeds.get((arm, grasp, self.purpose))
+        starts = [(fixed, seed) for fixed in keep]
+        if seed is not None:
+            starts.insert(1, (torso, None))
+        for index, (fixed, start) in enumerate(starts):
+            solved = self._solve(ctx, arm, grasp, base, fixed, poses, start)
+            last = index == len(starts) - 1
             if solved is None:
                 if last:
                     self.rejected["ik"] += 1
@@ -229,12 +236,13 @@ class CostmapLocation:
 
     def _solve(self, ctx: RobotContext, arm: str, grasp: str, base: BasePose,
                torso: float | None, poses: dict[str, tuple[pin.SE3, bool]],
+               seed: dict[str, float] | None = None,
                ) -> dict[str, dict[str, float]] | None:
         """IK for the grasp (the torso fixed at `torso`, or None: free, drawn toward the
         table-setting height), then the approach and departure from it on the same torso;
         if those fail from one grasp solution, from another one (a few tries)."""
         ik = arm_ik(arm)
-        seed = ctx.ik_seeds.get((arm, grasp, self.purpose)) or reaching_seed(arm)
+        seed = seed or reaching_seed(arm)
         local = {key: in_base_frame(pose, base) for key, (pose, _) in poses.items()}
         for attempt in range(IK_ATTEMPTS):
             start = seed if attempt == 0 else reaching_seed(arm) if attempt == 1 else None

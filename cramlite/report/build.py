@@ -29,15 +29,14 @@ def build_report(folder: str | Path, *, figures: bool = True,
     GIFs of traced trials; `running`: whether a bench is still filling the folder (None:
     ask its lock)."""
     from cramlite.bench.plots import strategy_colours
-    from cramlite.bench.summary import order_percentiles, paired_tests, summarise
+    from cramlite.bench.summary import order_percentiles, reference_tests, summarise
     from cramlite.report.replays import DEFAULT_SPEED
 
     data = read_folder(folder, running=running)
     rows = data.rows
     baseline = {n: tuple(s.baseline_order) for n, s in data.setups.items() if s is not None}
     summary = summarise(rows, baseline)
-    tests = ([paired_tests(rows, s) for s in data.strategies if s != "baseline"]
-             if "baseline" in {r["strategy"] for r in rows} else [])
+    tests = reference_tests(rows)
     page = PageData(data, summary, [t for t in tests if t["pairs"]],
                     order_percentiles(rows), strategy_colours(data.strategies), baseline)
     page.interest, page.failed_left_out = trials_of_interest(rows)

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from cramlite.bench.labels import by_backend, several_backends
 from cramlite.bench.specs import FIXED_ORDER, trace_file
 from cramlite.errors import UserInputError
 
@@ -42,14 +43,21 @@ class BenchFolder:
     running: str = ""  #: who holds the folder's lock (a bench still filling it), or ""
 
     @property
+    def backends(self) -> list[str]:
+        """The backends the rows ran on (none named: rows of an older cramlite)."""
+        return sorted({r.get("backend") or "" for r in self.rows})
+
+    @property
     def setup_names(self) -> list[str]:
         return sorted(self.setups)
 
     def trace(self, row: dict[str, Any]) -> Path | None:
         """The trial's trace, if the bench wrote one (`bench --traces`)."""
         folder = self.path / "traces"
-        path = Path(trace_file(folder, row["setup"], row.get("plan", ""), row["strategy"],
-                               row["trial"]))
+        backend = row.get("backend", "") if len(self.backends) > 1 else ""
+        path = Path(trace_file(folder, row["setup"], row.get("plan", ""),
+                               row.get("strategy_name", row["strategy"]), row["trial"],
+                               backend))
         return path if path.is_file() and path.stat().st_size > 0 else None
 
 
@@ -67,14 +75,16 @@ def read_folder(path: str | Path, running: bool | None = None) -> BenchFolder:
         raise UserInputError(f"holds no trials.csv or metadata.json; {NOT_A_BENCH}",
                              source=src)
     metadata = _metadata(meta_path)
-    rows = _rows(csv_path)
+    rows = by_backend(_rows(csv_path))
     if not rows:
         raise UserInputError("no finished trial yet; expected at least one row (rerun the "
                              "report once the bench has finished a trial)",
                              source=str(csv_path))
     arguments = metadata.get("arguments") if isinstance(metadata.get("arguments"), dict) \
         else {}
-    strategies = set(_names(arguments.get("strategies"))) | {r["strategy"] for r in rows}
+    strategies = {r["strategy"] for r in rows}
+    if not several_backends(rows):  # (the strategies asked for, also those with no row yet)
+        strategies |= set(_names(arguments.get("strategies")))
     result = BenchFolder(folder, rows, metadata, {},
                          strategies=sorted(strategies - {FIXED_ORDER}))
     _load_setups(result, arguments)
@@ -183,12 +193,14 @@ def _planned(folder: BenchFolder, arguments: dict[str, Any]) -> None:
                   str(s.source) in _names(arguments.get("setups")) or
                   s.source.parent == folder.path / "setups")]
     names = sorted(set(names))
+    backends = _names(arguments.get("backends")) or [""]
     total = len(names) * len(strategies) * trials
     if arguments.get("all_orders"):
         total += sum(math.factorial(len(folder.setups[n].items)) for n in names)
-    done = {(r["setup"], r["strategy"], r["trial"], r.get("given_order", ""))
-            for r in folder.rows if r["setup"] in names
-            and (r["strategy"] == FIXED_ORDER or (r["strategy"] in strategies
+    total *= len(backends)
+    done = {(r["setup"], r["strategy"], r["trial"], r.get("given_order", ""),
+             r.get("backend", "")) for r in folder.rows if r["setup"] in names
+            and (r["strategy"] == FIXED_ORDER or (r["strategy_name"] in strategies
                                                   and int(r["trial"]) < trials))}
     folder.planned, folder.planned_done = total, min(len(done), total)
 

@@ -308,14 +308,17 @@ def _trial(data: PageData, row: dict[str, Any]) -> str:
     head = (f'<div class="trial{"" if good else " failed"}" id="trial-{e(tid)}"><h4>'
             f"{chip(colour)}{e(row['setup'])} · {e(row['strategy'])} · trial {e(row['trial'])}"
             f" — " + ("succeeded" if good else '<span class="bad">FAILED</span>') + "</h4>")
+    strategy = row.get("strategy_name", row["strategy"])
+    backend = f" --backend {e(row['backend'])}" if row.get("backend") else ""
     facts = (f"<p>Order: {order_html(row['order'])}<br><span class=note>seed "
-             f"{e(row.get('seed', '–'))}; robot time {num(row.get('robot_time_s'))} s = wall "
-             f"{num(row.get('wall_s'))} s + driving {num(row.get('drive_s'))} s + arm "
-             f"{num(row.get('arm_s'))} s (opening and closing {num(row.get('open_close_s'))} "
-             f"s); driven path {num(row.get('base_path_m'))} m. Rerun it alone: "
+             f"{e(row.get('seed', '–'))}; robot time {num(row.get('robot_time_s'))} s "
+             f"(driving {num(row.get('drive_s'))} s, arm {num(row.get('arm_s'))} s; opening "
+             f"and closing {num(row.get('open_close_s'))} s), computed in "
+             f"{num(row.get('wall_s'))} s; driven path {num(row.get('base_path_m'))} m"
+             f"{'; on ' + e(row['backend']) if row.get('backend') else ''}. Rerun it alone: "
              f"<code>cramlite run {e(row['setup'])} --strategy "
-             f"{e(row['strategy'] if row['strategy'] != FIXED_ORDER else 'baseline')} "
-             f"--seed {e(row.get('seed', 0))}</code></span></p>")
+             f"{e(strategy if strategy != FIXED_ORDER else 'baseline')} "
+             f"--seed {e(row.get('seed', 0))}{backend}</code></span></p>")
     parts = [head, facts]
     if not good:
         lines = failure_text(row).split(" | ")

@@ -24,17 +24,18 @@ def ok(row: dict[str, Any]) -> bool:
 def trial_id(row: dict[str, Any]) -> str:
     """A name for a trial usable in file names and anchors: a slug of its setup, plan,
     strategy and index with a hash of them (see `cramlite.safe_names`)."""
-    return trial_stem(row["setup"], row.get("plan", ""), row["strategy"], row["trial"])
+    return trial_stem(row["setup"], row.get("plan", ""), row["strategy"], row["trial"],
+                      row.get("backend", ""))
 
 
 def trials_of_interest(rows: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], int]:
-    """The first trial of each setup and strategy, then every failed trial (at most
+    """The first trial of each setup, strategy and backend, then every failed trial (at most
     MAX_FAILED_TIMELINES of them); and how many failed trials were left out."""
     first: dict[tuple[str, str], dict[str, Any]] = {}
     for row in rows:
         if row["strategy"] == FIXED_ORDER:
             continue
-        key = (row["setup"], row["strategy"])
+        key = (row["setup"], row["strategy"], row.get("backend", ""))
         if key not in first or int(row["trial"]) < int(first[key]["trial"]):
             first[key] = row
     chosen = [first[k] for k in sorted(first)]

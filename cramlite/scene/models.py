@@ -107,6 +107,7 @@ class ArticulatedModel:
 
     def __init__(self, urdf: Path, package_dirs: list[str] | None = None):
         self.urdf = Path(urdf)
+        self.package_dirs = list(package_dirs or [])
         self.model = pin.buildModelFromUrdf(str(urdf))
         geometry = pin.buildGeomFromUrdf(self.model, str(urdf), pin.GeometryType.COLLISION,
                                          package_dirs=package_dirs or [])

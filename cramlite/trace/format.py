@@ -1,17 +1,22 @@
-"""The trace format `cramlite-trace/1`: every executed state of a trial, JSON Lines.
+"""The trace format `cramlite-trace/2`: every executed state of a trial, JSON Lines.
 
 Line 1 is a header:
-    {"format": "cramlite-trace/1", "setup": <name or absolute path load_setup accepts>,
+    {"format": "cramlite-trace/2", "setup": <name or absolute path load_setup accepts>,
      "plan": ..., "strategy": ..., "seed": ..., "joints": [PR2 joint names, order of "q"],
-     "world_joints": [the world's movable joints, order of "w"]}
+     "world_joints": [the world's movable joints, order of "w"],
+     "backend": what executed it, "cramlite": the version that wrote it,
+     "robot": {"urdf": path, "sha256": ..., "joint_limits": {name: [lower, upper,
+               velocity]}}}
 then one line per executed state, in order:
     {"t": robot time since the plan started (s, non-decreasing), "base": [x, y, yaw],
      "q": [...], "w": [...], "held": {object: arm},
      "objects": {name: [x, y, z, qx, qy, qz, qw]},
      "action": {"name": "PickUpAction", "object": "cup"} or null}
 
-`joints` lists the joints cramlite moves (torso, both arms, the grippers' fingers); the
-others keep their default. Reading validates every line and names the one at fault.
+`joints` lists the joints cramlite moves (torso, both arms, every finger joint of both
+grippers); the others keep their default. `t` is the robot's own time. `cramlite-trace/1`
+(the same without `backend`, `cramlite` and `robot`) is read too. Reading validates every
+line and names the one at fault.
 """
 
 from __future__ import annotations
@@ -25,8 +30,12 @@ from typing import IO, Any
 
 from cramlite.errors import UserInputError
 
-TRACE_FORMAT = "cramlite-trace/1"
+TRACE_FORMAT = "cramlite-trace/2"
+#: The formats read (a /1 trace still replays and checks).
+READ_FORMATS = ("cramlite-trace/1", TRACE_FORMAT)
 HEADER_KEYS = ("format", "setup", "plan", "strategy", "seed", "joints", "world_joints")
+#: What /2 adds to the header (optional on reading: /1 has none of them).
+HEADER_KEYS_2 = ("backend", "cramlite", "robot")
 STATE_KEYS = ("t", "base", "q", "w", "held", "objects", "action")
 DIGITS = 6
 
@@ -47,7 +56,8 @@ class TraceWriter:
         self.joints = list(header["joints"])
         self.world_joints = list(header["world_joints"])
         self._handle: IO[str] | None = self.path.open("w", encoding="utf-8")
-        self._write({"format": TRACE_FORMAT, **{k: header[k] for k in HEADER_KEYS[1:]}})
+        self._write({"format": TRACE_FORMAT, **{k: header[k] for k in HEADER_KEYS[1:]},
+                     **{k: header[k] for k in HEADER_KEYS_2 if k in header}})
         self.states = 0
         self.last_t = 0.0
 
@@ -129,14 +139,14 @@ def read_trace(path: str | Path) -> Trace:
         except UnicodeDecodeError:
             raise TraceError("not UTF-8 text; expected JSON Lines", source=src) from None
     if header is None:
-        raise TraceError("empty file; expected a cramlite-trace/1 header line", source=src)
+        raise TraceError(f"empty file; expected a {TRACE_FORMAT} header line", source=src)
     return Trace(header, states)
 
 
 def _check_header(record: dict[str, Any], fail) -> dict[str, Any]:
-    if record.get("format") != TRACE_FORMAT:
-        raise fail(f"expected a header with \"format\": \"{TRACE_FORMAT}\", got "
-                   f"{json.dumps(record.get('format'))}")
+    if record.get("format") not in READ_FORMATS:
+        raise fail(f"expected a header with \"format\": \"{TRACE_FORMAT}\" (or "
+                   f"\"{READ_FORMATS[0]}\"), got {json.dumps(record.get('format'))}")
     missing = [k for k in HEADER_KEYS if k not in record]
     if missing:
         raise fail(f"header misses {', '.join(missing)}")

@@ -1,8 +1,9 @@
 """Replaying a trace: the frames of an animation at a frame rate of robot time.
 
 `render_gif` draws the trace headless: each frame shows the state reached at its robot
-time, drawn by a backend's renderer (PyBullet's TinyRenderer); `replay_gui` plays it in
-the PyBullet window. The check of a trace (`replay --check`) is `cramlite.trace.check`.
+time, drawn by the renderer of a backend (`cramlite.render`: PyBullet's TinyRenderer for
+pybullet, cramlite's own rasteriser for the others); `replay_gui` plays it in the PyBullet
+window. The check of a trace (`replay --check`) is `cramlite.trace.check`.
 """
 
 from __future__ import annotations
@@ -48,11 +49,14 @@ def caption(image, t: float, state: dict[str, Any]) -> None:
 
 def render_gif(trace: Trace, out: str | Path, fps: float = 10.0, speed: float = 1.0,
                width: int = 480, height: int = 360,
-               progress: Callable[[int], None] | None = None) -> int:
-    """Render the trace as an animated GIF; returns the number of frames."""
+               progress: Callable[[int], None] | None = None,
+               backend: str | None = None) -> int:
+    """Render the trace as an animated GIF (drawn as `backend` draws: default the
+    default backend); returns the number of frames."""
     from PIL import Image
 
-    from cramlite.backends.pybullet.replay import apply_state, render_frame, world_for
+    from cramlite.backends import default_backend
+    from cramlite.render import TraceFrames
 
     if not trace.states:
         raise TraceError("the trace has no states to replay", field="line 2")
@@ -62,11 +66,9 @@ def render_gif(trace: Trace, out: str | Path, fps: float = 10.0, speed: float = 
                              f"most {MAX_FRAMES} (raise --speed or lower --fps)",
                              field="--fps")
     frames = []
-    joints = trace.header["joints"]
-    with world_for(trace) as world:
+    with TraceFrames(trace, backend or default_backend()) as drawer:
         for k, state in enumerate(states_at_frames(trace, fps, speed)):
-            apply_state(world, joints, state, trace.header["world_joints"])
-            image = Image.fromarray(render_frame(world, width, height))
+            image = Image.fromarray(drawer.image(state, width, height))
             caption(image, k * speed / fps, state)
             frames.append(image.quantize(colors=128, method=Image.Quantize.MEDIANCUT))
             if progress:

@@ -118,7 +118,10 @@ class SimulatedProcessModules(ProcessModules):
         return self.world.world_joint_positions()
 
     def object_pose(self, obj: str) -> tuple[Vec3, Quat]:
-        return self.world.objects[obj].pose()
+        """Where an item is, to the micrometre (PyBullet keeps bodies' poses in single
+        precision: what it reports beyond that is noise of its own, not the world's)."""
+        (x, y, z), orientation = self.world.objects[obj].pose()
+        return (round(x, 6), round(y, 6), round(z, 6)), orientation
 
     def tool_pose(self, arm: str) -> tuple[Vec3, Quat]:
         return self.robot.link_pose(tool_frame(arm))
