@@ -18,7 +18,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-from scipy.spatial import ConvexHull, QhullError
 
 from cramlite.designators.context import Holding, RobotContext, carried_map
 from cramlite.designators.failures import (
@@ -48,6 +47,7 @@ from cramlite.designators.motions import (
 )
 from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription, as_object
 from cramlite.designators.tasks import recorded
+from cramlite.motion.footprint import convex_hull_2d
 from cramlite.motion.ik import ARMS
 from cramlite.motion.trajectory import wrap_angle
 from cramlite.process_cache import ProcessCache
@@ -485,9 +485,8 @@ def footprint_outline(points_xy: np.ndarray, spacing: float) -> np.ndarray:
     """Points every `spacing` along the convex hull of 2D points (a carried object's or a
     link's footprint as seen from above)."""
     pts = np.asarray(points_xy, dtype=float).reshape(-1, 2)
-    try:
-        hull = pts[ConvexHull(pts).vertices]
-    except (QhullError, ValueError):  # fewer than 3 points, or all on a line
+    hull = convex_hull_2d(pts)
+    if len(hull) < 3 or abs(_area(hull)) < 1e-12:  # fewer than 3 points, or all on a line
         return np.unique(np.round(pts, 6), axis=0)
     # n points on each edge a -> b, from a (inclusive) towards b (exclusive)
     edges = np.roll(hull, -1, axis=0) - hull
@@ -495,6 +494,12 @@ def footprint_outline(points_xy: np.ndarray, spacing: float) -> np.ndarray:
     edge = np.repeat(np.arange(len(hull)), n)
     step = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)
     return hull[edge] + (step / n[edge])[:, None] * edges[edge]
+
+
+def _area(polygon: np.ndarray) -> float:
+    """Signed area of a polygon (shoelace)."""
+    x, y = polygon[:, 0], polygon[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
 
 
 def update_carried(ctx: RobotContext) -> None:

@@ -16,7 +16,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg import lapack
 
 from cramlite.scene.models import pr2_model
 from cramlite.world.pr2 import TORSO_JOINT
@@ -273,8 +272,7 @@ class ArmIK:
         """Damped least squares, v = J^T (J J^T + damping I)^-1 err. With a preferred torso
         height, the torso's column is weighted down (the arm does most of the work, so the
         torso stays near the height it started at) and a pull toward the preference is
-        added in the null space. (LAPACK's Cholesky solver directly: numpy's inv costs
-        three times as much on a 6x6 matrix.)"""
+        added in the null space. (See `_solve_spd` for the solver.)"""
         if preferred_torso_m is None or self._torso is None:
             return jac.T @ _solve_spd(jac @ jac.T + self.options.damping * EYE6, err)
         iq, iv = self._torso
@@ -291,11 +289,22 @@ class ArmIK:
 
 
 def _solve_spd(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """x with matrix @ x = rhs, for a symmetric positive definite matrix."""
-    _, x, info = lapack.dposv(matrix, rhs)
-    if info != 0:  # (not positive definite: cannot happen with damping > 0)
+    """x with matrix @ x = rhs (the matrix is symmetric positive definite: damped).
+
+    numpy's LAPACK solve gufuncs directly: 1 us on a 6x6 matrix, where np.linalg.solve's
+    checks cost 5 us (a v1 trial solves ~5000 of them) and scipy.linalg's dposv, as fast,
+    costs 0.25 s to import. np.linalg.solve where the gufuncs are missing."""
+    if _GUFUNC_SOLVE is None:
         return np.linalg.solve(matrix, rhs)
-    return x
+    return _GUFUNC_SOLVE[rhs.ndim == 1](matrix, rhs)
+
+
+try:  # (numpy's own LAPACK wrappers, numpy 1.x and 2.x alike)
+    from numpy.linalg import _umath_linalg
+
+    _GUFUNC_SOLVE = (_umath_linalg.solve, _umath_linalg.solve1)
+except (ImportError, AttributeError):  # pragma: no cover - another numpy
+    _GUFUNC_SOLVE = None
 
 
 @functools.cache

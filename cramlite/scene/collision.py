@@ -24,7 +24,7 @@ could lie inside a mesh the winding number of one of its points decides
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import coal
@@ -32,6 +32,7 @@ import numpy as np
 
 from cramlite.scene.geometry import (
     PointGrid,
+    convex_hull_planes,
     inside_mesh,
     point_triangle_distances,
     primitive_depth,
@@ -39,7 +40,7 @@ from cramlite.scene.geometry import (
     winding_numbers,
 )
 from cramlite.scene.kinematics import BatchedFrames
-from cramlite.scene.models import MESH, Shape
+from cramlite.scene.models import BOX, CYLINDER, MESH, Shape
 from cramlite.scene.scene import PlanningScene, tool_frame
 from cramlite.scene.transforms import planar
 
@@ -153,6 +154,7 @@ class SceneCollisions:
         self._kitchen: dict[tuple, tuple[np.ndarray, np.ndarray, np.ndarray, dict]] = {}
         self.request = coal.CollisionRequest()
         self._requests: dict[float, coal.CollisionRequest] = {}
+        self._eroded: dict[tuple, coal.CollisionGeometry | None] = {}
 
     def enclosed(self, a: Shape, pa: np.ndarray, b: Shape, pb: np.ndarray) -> bool:
         """Does one shape lie wholly inside the other, a mesh (no surfaces cross)? Then a
@@ -161,7 +163,7 @@ class SceneCollisions:
         for inner, pi, outer, po in ((a, pa, b, pb), (b, pb, a, pa)):
             if outer.kind != MESH or inner.radius >= outer.radius:
                 continue
-            point = inner.vertices[0] if inner.kind == MESH else inner.centre
+            point = _reference_point(inner)
             world = pi[:3, :3] @ point + pi[:3, 3]
             local = (world - po[:3, 3]) @ po[:3, :3]
             if np.any(np.abs(local - outer.centre) > outer.half):
@@ -202,10 +204,7 @@ class SceneCollisions:
         """The outward normals and offsets of a mesh's convex hull (inside: n.x + d <= 0)."""
         key = ("hull", id(shape))
         if key not in self._hulls:
-            from scipy.spatial import ConvexHull
-
-            equations = ConvexHull(shape.vertices).equations
-            self._hulls[key] = (equations[:, :3].copy(), equations[:, 3].copy())
+            self._hulls[key] = convex_hull_planes(shape.vertices)
         return self._hulls[key]
 
     def samples_near(self, shape: Shape, placement: np.ndarray, other: Shape,
@@ -220,6 +219,22 @@ class SceneCollisions:
         local = (centre + corners * span - placement[:3, 3]) @ placement[:3, :3]
         points = grid.within(local.min(axis=0), local.max(axis=0))
         return points @ placement[:3, :3].T + placement[:3, 3]
+
+    def eroded(self, shape: Shape, by: float) -> coal.CollisionGeometry | None:
+        """A box, cylinder or sphere shrunk by `by` on every side (None if nothing is
+        left): the points deeper than `by` in the shape are the points inside it."""
+        key = (id(shape), round(by, 9))
+        if key not in self._eroded:
+            half = shape.half - by
+            if np.any(half <= 0):
+                self._eroded[key] = None
+            elif shape.kind == BOX:
+                self._eroded[key] = coal.Box(*(2 * half))
+            elif shape.kind == CYLINDER:
+                self._eroded[key] = coal.Cylinder(float(half[0]), float(2 * half[2]))
+            else:
+                self._eroded[key] = coal.Sphere(float(half[0]))
+        return self._eroded[key]
 
     def request_with(self, margin: float) -> coal.CollisionRequest:
         request = self._requests.get(margin)
@@ -370,6 +385,10 @@ class MotionCheck:
         self._rotations = self._in_frame[:, :3, :3]
         self._centres = (self._rotations @ self._centres[:, :, None])[:, :, 0] + \
             self._in_frame[:, :3, 3]
+        #: each part's point that `enclosed` tests (in its frame): one inside the shape
+        self._refs = np.array([f[:3, :3] @ _reference_point(sh) + f[:3, 3]
+                               for f, sh in zip(self._in_frame, shapes, strict=True)]
+                              ).reshape(-1, 3)
         self._static_frames = scene.link_matrices(layout.static_links, self.values, self.base) \
             if layout.static_links else {}
         self._world_joints = dict(scene.belief.world_joints)
@@ -407,6 +426,9 @@ class MotionCheck:
             lo[others], hi[others] = o_lo, o_hi
             turned.update({others[k]: v for k, v in o_turned.items()})
         self._placements, self._lo, self._hi, self._turned = placements, lo, hi, turned
+        self._obstacle_refs = np.array([
+            placements[k, :3, :3] @ _reference_point(o.shape) + placements[k, :3, 3]
+            for k, o in enumerate(self.obstacles)]).reshape(-1, 3)
         self._transforms: dict[int, coal.Transform3s] = {}
 
     def _item_matrix(self, name: str) -> np.ndarray:
@@ -439,8 +461,10 @@ class MotionCheck:
               ) -> tuple[np.ndarray, np.ndarray]:
         """Broadphase for S states: (S x parts x obstacles) parts whose boxes (their local
         bounds turned into the world, axis-aligned) meet obstacle boxes, and (S x pairs)
-        moving parts whose boxes meet. A turned obstacle box (an open door) is tested
-        against the part's bounding sphere, not its axis-aligned bounds."""
+        moving parts whose boxes meet; and the boxes (S x P x 3 centres and half spans) and
+        the points `enclosed` tests (S x P x 3), for `_nested`.
+        A turned obstacle box (an open door) is tested against the part's bounding
+        sphere, not its axis-aligned bounds."""
         s = len(frames)
         placed = frames[:, self._rows]  # S x P x 4 x 4
         rotations = placed[..., :3, :3]
@@ -448,6 +472,7 @@ class MotionCheck:
         pad = max(0.0, margin)
         spans = np.abs(rotations @ self._rotations) @ self._halves[None, :, :, None]
         spans = spans[..., 0] + pad  # S x P x 3
+        refs = (rotations @ self._refs[None, :, :, None])[..., 0] + placed[..., :3, 3]
         near = np.zeros((s, len(self.parts), len(self.obstacles)), dtype=bool)
         if len(self.obstacles) and len(self.parts):
             low = (centres - spans).reshape(-1, 3).min(axis=0)
@@ -470,7 +495,23 @@ class MotionCheck:
             a, b = self._pairs[:, 0], self._pairs[:, 1]
             meets = np.all(np.abs(centres[:, a] - centres[:, b]) <= spans[:, a] + spans[:, b],
                            axis=2)
-        return near, meets
+        return near, meets, (centres, spans, refs)
+
+    def _nested(self, boxes: tuple[np.ndarray, np.ndarray, np.ndarray], near: np.ndarray,
+                meets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """For one state's meeting (part, obstacle) and (part, part) pairs: may one shape
+        lie wholly inside the other? Only if the point of it that `enclosed` tests lies in
+        the other's box."""
+        centres, spans, refs = boxes
+        p, k = np.nonzero(near)
+        ref = refs[p]
+        in_obstacle = np.all((self._lo[k] <= ref) & (ref <= self._hi[k]), axis=1)
+        in_part = np.all(np.abs(self._obstacle_refs[k] - centres[p]) <= spans[p], axis=1)
+        pairs = self._pairs[np.flatnonzero(meets)]
+        a, b = pairs[:, 0], pairs[:, 1]
+        nested_pairs = (np.all(np.abs(refs[a] - centres[b]) <= spans[b], axis=1)
+                        | np.all(np.abs(refs[b] - centres[a]) <= spans[a], axis=1))
+        return in_obstacle | in_part, nested_pairs
 
     def states_free(self, states: np.ndarray, order: Sequence[int] | None = None) -> bool:
         """Every state (rows of joint vectors) free: one broadphase for all of them, then
@@ -480,10 +521,11 @@ class MotionCheck:
         if not len(states) or not len(self.parts):
             return True
         frames = self._link_frames(states)
-        near, meets = self._near(frames)
+        near, meets, boxes = self._near(frames)
         flagged = set(np.flatnonzero(near.any(axis=(1, 2)) | meets.any(axis=1)).tolist())
         for i in (order if order is not None else range(len(states))):
-            if i in flagged and not self._state_free(frames[i], near[i], meets[i], 0.0):
+            if i in flagged and not self._state_free(frames[i], near[i], meets[i], 0.0,
+                                                     tuple(b[i] for b in boxes)):
                 return False
         return True
 
@@ -494,10 +536,11 @@ class MotionCheck:
         if not len(self.parts):
             return True
         frames = self._link_frames(np.asarray(q, dtype=float)[None])
-        near, meets = self._near(frames, margin_m)
+        near, meets, boxes = self._near(frames, margin_m)
         if not near.any() and not meets.any():
             return True
-        return self._state_free(frames[0], near[0], meets[0], margin_m)
+        return self._state_free(frames[0], near[0], meets[0], margin_m,
+                                tuple(b[0] for b in boxes))
 
     def is_free_at(self, base: tuple[float, float, float], q: Sequence[float]) -> bool:
         """`is_free(q)` with the base at another pose (a check built without
@@ -510,8 +553,14 @@ class MotionCheck:
             self.base_matrix = saved
 
     def _state_free(self, frames: np.ndarray, near: np.ndarray, meets: np.ndarray,
-                    margin: float) -> bool:
+                    margin: float, boxes: tuple[np.ndarray, np.ndarray, np.ndarray]) -> bool:
         placed: dict[int, tuple[np.ndarray, coal.Transform3s]] = {}
+        nesting: list[tuple[np.ndarray, np.ndarray]] = []  # (worked out when first asked)
+
+        def nested(kind: int, index: int) -> bool:
+            if not nesting:
+                nesting.append(self._nested(boxes, near, meets))
+            return bool(nesting[0][kind][index])
 
         def part(i: int) -> tuple[np.ndarray, coal.Transform3s]:
             if i not in placed:
@@ -519,26 +568,29 @@ class MotionCheck:
                 placed[i] = (matrix, _transform(matrix))
             return placed[i]
 
-        for p, k in np.argwhere(near):
+        for index, (p, k) in enumerate(np.argwhere(near).tolist()):
             pa, ta = part(p)
             if self._collides(self.parts[p].shape, pa, ta, self.obstacles[k].shape,
                               self._placements[k], self._obstacle_transform(k),
-                              self._allowance(self.obstacles[k], self.parts[p]), margin):
+                              self._allowance(self.obstacles[k], self.parts[p]), margin,
+                              lambda index=index: nested(0, index)):
                 return False
-        for n in np.flatnonzero(meets):
+        for index, n in enumerate(np.flatnonzero(meets).tolist()):
             i, j = self._pairs[n]
             pa, ta = part(i)
             pb, tb = part(j)
             if self._collides(self.parts[i].shape, pa, ta, self.parts[j].shape, pb, tb,
-                              self._allowance(None, self.parts[i], self.parts[j]), margin):
+                              self._allowance(None, self.parts[i], self.parts[j]), margin,
+                              lambda index=index: nested(1, index)):
                 return False
         return True
 
     def _collides(self, a: Shape, pa: np.ndarray, ta: coal.Transform3s, b: Shape,
                   pb: np.ndarray, tb: coal.Transform3s, allowance: float,
-                  margin: float) -> bool:
+                  margin: float, nested: Callable[[], bool] = lambda: True) -> bool:
         """Are two placed shapes inside each other beyond what is allowed (keeping
-        `margin` further apart)?"""
+        `margin` further apart)? `nested()`: may one lie wholly inside the other (a
+        cheap necessary condition, asked before the exact `enclosed`)?"""
         owner = self.owner
         clearance = margin - allowance  # > 0: they must be this far apart
         meshes = a.kind == MESH or b.kind == MESH
@@ -547,18 +599,23 @@ class MotionCheck:
             coal.collide(a.geometry, ta, b.geometry, tb, owner.request_with(clearance), result)
             if result.isCollision():
                 return True
-            return meshes and owner.enclosed(a, pa, b, pb)
-        coal.collide(a.geometry, ta, b.geometry, tb, owner.request, result)
-        if not result.isCollision():
-            return owner.enclosed(a, pa, b, pb)
-        if allowance - max(margin, 0.0) <= 0 or (a.kind == MESH and b.kind == MESH):
-            return True
-        mesh, pm, prim, pp = (a, pa, b, pb) if a.kind == MESH else (b, pb, a, pa)
-        points = owner.samples_near(mesh, pm, prim, pp)
-        if not len(points):
-            return False
-        local = (points - pp[:3, 3]) @ pp[:3, :3]
-        return float(primitive_depth(local, prim).max()) > allowance - max(margin, 0.0)
+            return meshes and (nested() and owner.enclosed(a, pa, b, pb))
+        limit = allowance - max(margin, 0.0)
+        if limit <= 0 or (a.kind == MESH and b.kind == MESH):
+            coal.collide(a.geometry, ta, b.geometry, tb, owner.request, result)
+            return result.isCollision() or (nested() and owner.enclosed(a, pa, b, pb))
+        # a mesh and a primitive, `limit` allowed: a surface point of the mesh is deeper
+        # than that in the primitive exactly where the mesh meets the primitive shrunk by it
+        prim_first = a.kind != MESH
+        eroded = owner.eroded(a if prim_first else b, limit)
+        if eroded is not None:
+            if prim_first:
+                coal.collide(eroded, ta, b.geometry, tb, owner.request, result)
+            else:
+                coal.collide(a.geometry, ta, eroded, tb, owner.request, result)
+            if result.isCollision():
+                return True
+        return (nested() and owner.enclosed(a, pa, b, pb))
 
     def _allowance(self, obstacle: _Obstacle | None, part: _Part,
                    other: _Part | None = None) -> float:
@@ -581,7 +638,7 @@ class MotionCheck:
         its depth, deepest first."""
         q = np.array([self.values[n] for n in self.joints]) if q is None else np.asarray(q)
         frames = self._link_frames(np.asarray(q, dtype=float)[None])[0]
-        near, meets = self._near(frames[None])
+        near, meets, _ = self._near(frames[None])
         out = []
         for p, k in np.argwhere(near[0]):
             part, obstacle = self.parts[p], self.obstacles[k]
@@ -602,6 +659,11 @@ class MotionCheck:
     def current(self) -> np.ndarray:
         """The moving joints' values as believed (or as `fixed` set them)."""
         return np.array([self.values[n] for n in self.joints])
+
+
+def _reference_point(shape: Shape) -> np.ndarray:
+    """The point of a shape (its frame) that `SceneCollisions.enclosed` tests."""
+    return shape.vertices[0] if shape.kind == MESH else shape.centre
 
 
 def _enclosure_depth(a: Shape, pa: np.ndarray, b: Shape, pb: np.ndarray) -> float:
