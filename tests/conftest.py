@@ -1,7 +1,8 @@
-"""Shared fixtures: setups and worlds are real (PyBullet DIRECT, Pinocchio)."""
+"""Shared fixtures: setups and worlds are real (PyBullet DIRECT where installed, Pinocchio)."""
 
 from __future__ import annotations
 
+import importlib.util
 import subprocess
 import sys
 from pathlib import Path
@@ -9,6 +10,19 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+
+#: pybullet has wheels up to Python 3.11 only: where it is missing, the tests of the
+#: pybullet backend are skipped (saying so) and the rest run on the kinematic backend.
+HAS_PYBULLET = importlib.util.find_spec("pybullet") is not None
+NO_PYBULLET = ("pybullet is not installed (it has wheels up to Python 3.11 only): the "
+               "pybullet backend's tests are skipped")
+needs_pybullet = pytest.mark.skipif(not HAS_PYBULLET, reason=NO_PYBULLET)
+
+
+def skip_module_without_pybullet() -> None:
+    """Call at the top of a test module that is about the pybullet backend."""
+    if not HAS_PYBULLET:
+        pytest.skip(NO_PYBULLET, allow_module_level=True)
 
 
 def run_cli(*args: str, stdin: str | None = None, cwd: Path | None = None,

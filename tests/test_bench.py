@@ -16,7 +16,7 @@ import pytest
 from cramlite.bench.store import TIMING_COLUMNS
 from cramlite.safe_names import trial_stem
 from cramlite.trace import read_trace
-from tests.conftest import ROOT, run_cli
+from tests.conftest import HAS_PYBULLET, ROOT, run_cli
 
 SMALL = ["--setups", "v1", "--strategies", "opm,random", "--trials", "2", "--no-plots"]
 
@@ -61,7 +61,8 @@ def test_same_seed_same_rows_and_a_trial_reruns_alone(tmp_path: Path) -> None:
     assert comparable(a) == comparable(b)
     assert len(rows(a)) == 4
     meta = json.loads((a / "metadata.json").read_text())
-    assert {"pybullet", "pin", "ompl", "numpy"} <= set(meta["versions"])
+    assert {"pin", "coal", "ompl", "numpy"} <= set(meta["versions"])
+    assert ("pybullet" in meta["versions"]) == HAS_PYBULLET
     assert all(r["worker"] for r in rows(a))
     row = next(r for r in rows(a) if r["strategy"] == "random")
     alone = run_cli("run", row["setup"], "--strategy", "random", "--seed", row["seed"], "--json")

@@ -8,6 +8,10 @@ import math
 import numpy as np
 import pytest
 
+from tests.conftest import skip_module_without_pybullet
+
+skip_module_without_pybullet()
+
 from cramlite.backends.pybullet.client import p
 from cramlite.backends.pybullet.world import World
 from cramlite.designators import (

@@ -15,6 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.conftest import skip_module_without_pybullet
+
+skip_module_without_pybullet()
+
 from cramlite.backends.pybullet.world import World
 from cramlite.designators import (
     MotionPlanningFailed,
@@ -309,14 +313,14 @@ def test_the_broadphase_misses_no_penetration() -> None:
         door = next(k for k, o in enumerate(check.obstacles) if o.label == "cupboard_door")
         for angle in (1.2, 0.6):
             check.move_world_joint("cupboard_door_joint", angle)
-            states = rng.uniform(lower, upper, size=(200, len(names)))
+            states = rng.uniform(lower, upper, size=(50, len(names)))
             frames = check._link_frames(states)
-            near, meets = check._near(frames)  # a motion's: all states at once
+            near, meets, _ = check._near(frames)  # a motion's: all states at once
             turned, check._turned = check._turned, {}
             pruned += int(check._near(frames)[0][..., door].sum() - near[..., door].sum())
             check._turned = turned
             for s in range(len(states)):
-                one, one_meets = check._near(frames[s:s + 1])  # one state's
+                one, one_meets, _ = check._near(frames[s:s + 1])  # one state's
                 placed = frames[s][check._rows] @ check._in_frame
                 for p in range(len(check.parts)):
                     for k in range(len(check.obstacles)):
@@ -338,8 +342,8 @@ def test_the_broadphase_misses_no_penetration() -> None:
                         assert meets[s, n] and one_meets[0, n], (check.parts[i].label,
                                                                  check.parts[j].label)
         print("penetrating", penetrating, "of the robot itself", self_hits, "pruned", pruned)
-        assert pruned > 50  # the door's own box spared exact checks its bounds would need
-        assert penetrating > 100 and self_hits > 20  # the draw reaches into things often
+        assert pruned > 30  # the door's own box spared exact checks its bounds would need
+        assert penetrating > 60 and self_hits > 30  # the draw reaches into things often
 
 
 def test_a_carry_pose_depends_on_the_rest_of_the_robot_not_on_earlier_trials() -> None:

@@ -11,8 +11,6 @@ import pytest
 
 from cramlite.backends import EXECUTION_CALLS, OBSERVATION_CALLS
 from cramlite.backends.base import ProcessModules
-from cramlite.backends.pybullet import bodies
-from cramlite.backends.pybullet import world as pybullet_world
 from cramlite.designators import (
     MotionPlanningFailed,
     MoveArmJointsMotion,
@@ -25,7 +23,7 @@ from cramlite.trace.check import penetrations
 from cramlite.trial import TrialRunner
 from cramlite.world import load_setup
 from cramlite.world.pr2 import PARK_JOINTS
-from tests.conftest import run_cli
+from tests.conftest import needs_pybullet, run_cli
 
 #: The right arm reaching across the chest, the left one parked: the right gripper 9 cm
 #: inside the left shoulder's housing (found by a random search; the scene and the trace
@@ -38,7 +36,7 @@ RIGHT = list(ACROSS)
 
 def test_a_motion_into_the_robot_itself_is_refused_and_the_trace_check_finds_it(
         tmp_path: Path) -> None:
-    with simulated_robot(load_setup("v1"), backend="pybullet") as ctx:
+    with simulated_robot(load_setup("v1")) as ctx:
         ParkArmsAction().perform(ctx)
         check = ctx.collisions.check(RIGHT)
         goal = np.array([ACROSS[n] for n in RIGHT])
@@ -108,11 +106,15 @@ class Recording(ProcessModules):
     release_all = None
 
 
+@needs_pybullet
 def test_planning_never_moves_the_world_that_executes(monkeypatch) -> None:
     """A trial through process modules that record every call: they see only execution
     and observation calls, and nothing moves a body of the PyBullet world but an execution
     call in progress."""
-    runner = TrialRunner("c1")
+    from cramlite.backends.pybullet import bodies
+    from cramlite.backends.pybullet import world as pybullet_world
+
+    runner = TrialRunner("c1", backend="pybullet")
     recording = Recording(runner.modules)
     runner.modules = recording
     outside: list[str] = []
@@ -145,12 +147,13 @@ def test_planning_never_moves_the_world_that_executes(monkeypatch) -> None:
     assert outside == []
 
 
+@needs_pybullet
 def test_a_plan_acts_on_what_the_process_modules_report() -> None:
     """The cup stands 3 cm off the spot the setup (the scene's first belief) says: the
     trial grasps it where it is (the gripper's tool frame on the cup's axis, as the
     simulator has them when the gripper closes) and puts it on its target."""
     setup = load_setup("v1")
-    with TrialRunner(setup) as runner:
+    with TrialRunner(setup, backend="pybullet") as runner:
         real_reset = runner.backend.reset
         world = runner.world
 

@@ -9,6 +9,10 @@ import coal
 import numpy as np
 import pytest
 
+from tests.conftest import skip_module_without_pybullet
+
+skip_module_without_pybullet()
+
 from cramlite.backends.pybullet.client import p
 from cramlite.backends.pybullet.world import World
 from cramlite.motion.ik import arm_joint_names

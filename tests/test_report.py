@@ -233,12 +233,12 @@ def test_show_top_draws_the_labelled_map(tmp_path) -> None:
 
 
 def test_labels_are_spread_and_points_project_onto_the_image() -> None:
-    from cramlite.backends.pybullet.render import DEFAULT_CAMERA, project
+    from cramlite.render.camera import SHOW_CAMERA, camera
     from cramlite.world.topdown import spread
 
     placed = spread([1.0, 1.01, 1.02, 3.0, 0.99], 0.2, 0.0, 5.0)
     ordered = sorted(placed)
     assert all(b - a >= 0.2 - 1e-9 for a, b in zip(ordered, ordered[1:], strict=False))
     assert placed[3] == 3.0  # a label with room stays where its spot is
-    u, v = project(np.array([DEFAULT_CAMERA["target"]]), 640, 480)[0]
+    u, v = camera(None, SHOW_CAMERA).project(np.array([SHOW_CAMERA["target"]]), 640, 480)[0]
     assert (u, v) == pytest.approx((320, 240), abs=0.5)  # the camera looks at its target

@@ -10,6 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.conftest import skip_module_without_pybullet
+
+skip_module_without_pybullet()
+
 from cramlite.backends.pybullet.client import p
 from cramlite.backends.pybullet.world import World
 from cramlite.designators import MoveTorsoAction, ParkArmsAction, simulated_robot
