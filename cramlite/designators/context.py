@@ -24,6 +24,7 @@ from cramlite.backends.base import Backend, ProcessModules
 from cramlite.designators.tasks import TaskTree
 from cramlite.motion.arm_planner import ArmMotionPlanner, ArmPlannerOptions
 from cramlite.motion.base_planner import BaseMotionPlanner, BasePlannerOptions
+from cramlite.motion.base_timing import BaseLimits
 from cramlite.motion.footprint import FLOOR_HEIGHT_M, FootprintChecker, OccupancyMap
 from cramlite.motion.ik import ARMS, arm_ik
 from cramlite.motion.trajectory import (
@@ -56,9 +57,12 @@ class ExecutionOptions:
     place_tolerance_m: float = 0.05
     #: Longest physics time to let a placed object settle (stops earlier once at rest).
     settle_s: float = 0.3
-    #: Robot driving speed (the PR2's 3.6 km/h in the source) and base turn rate.
+    #: Robot driving speed (the PR2's 3.6 km/h in the source) and base turn rate, and
+    #: their accelerations (an assumption: see cramlite.motion.base_timing).
     drive_speed_m_s: float = 1.0
     turn_speed_rad_s: float = 1.0
+    drive_accel_m_s2: float = 1.0
+    turn_accel_rad_s2: float = 1.5
     #: Scale of the URDF's joint velocity limits for arm, torso and gripper motions.
     joint_speed_scale: float = 1.0
     #: How fast the gripper pulls or pushes a handle (drawers and doors move gently).
@@ -67,6 +71,11 @@ class ExecutionOptions:
     #: Leave containers opened to fetch or store an item open until the plan ends (the
     #: plan closes them then); by default each is closed as soon as the item is out (in).
     keep_containers_open: bool = False
+
+    @property
+    def base_limits(self) -> BaseLimits:
+        return BaseLimits(self.drive_speed_m_s, self.turn_speed_rad_s, self.drive_accel_m_s2,
+                          self.turn_accel_rad_s2)
 
 
 @dataclass

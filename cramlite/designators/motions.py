@@ -19,8 +19,9 @@ from cramlite.designators.context import RobotContext
 from cramlite.designators.failures import MotionPlanningFailed, ObjectUnreachable
 from cramlite.designators.grasps import in_base_frame
 from cramlite.designators.tasks import recorded
+from cramlite.motion.base_timing import time_base_path
 from cramlite.motion.ik import arm_ik, arm_prefix
-from cramlite.motion.trajectory import time_base_path, time_joint_path
+from cramlite.motion.trajectory import BaseTrajectory, time_joint_path
 from cramlite.scene.models import pr2_model
 
 BasePose = tuple[float, float, float]
@@ -76,9 +77,10 @@ class MoveMotion:
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
-        trajectory = time_base_path(self.waypoints, ctx.options.drive_speed_m_s,
-                                    ctx.options.turn_speed_rad_s)
-        ctx.drive(trajectory)
+        # (corners are blended where the footprint check, as the path's, says free)
+        timed = time_base_path(self.waypoints, ctx.options.base_limits,
+                               ctx.base_checker().is_free)
+        ctx.drive(BaseTrajectory(timed.poses, timed.times))
 
 
 @dataclass(frozen=True)

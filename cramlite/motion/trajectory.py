@@ -11,8 +11,7 @@ straight interpolation between consecutive states is what the robot does (at mos
   timed motion stays exactly on the straight segment that was collision-checked (a
   spline-based parameteriser such as TOPP-RA would round the corners between checked
   segments). The time of each dense state is where the leading joint reaches it.
-- base: constant speed (1.0 m/s, the PR2's 3.6 km/h of the source) and a turn rate limit,
-  whichever is slower per step.
+- base: see `cramlite.motion.base_timing` (corners blended, finite acceleration).
 """
 
 from __future__ import annotations
@@ -170,29 +169,6 @@ def time_joint_path(names: Sequence[str], vertices: np.ndarray, limits: JointLim
         times.append(t0)
     times_arr = np.maximum.accumulate(np.array(times))  # guard against rounding
     return JointTrajectory(names, np.array(positions), times_arr)
-
-
-def time_base_path(waypoints: Sequence[Sequence[float]], speed_m_s: float,
-                   turn_rad_s: float) -> BaseTrajectory:
-    """Densify base waypoints (x, y, yaw) to MAX_BASE_STEP_M / MAX_BASE_TURN_RAD and time
-    them at constant speed and turn rate (each step takes the longer of the two)."""
-    poses = [tuple(map(float, waypoints[0]))]
-    for a, b in zip(waypoints[:-1], waypoints[1:], strict=True):
-        dyaw = wrap_angle(b[2] - a[2])
-        dist = math.dist(a[:2], b[:2])
-        steps = max(1, math.ceil(max(dist / MAX_BASE_STEP_M, abs(dyaw) / MAX_BASE_TURN_RAD)
-                                 - 1e-9))
-        for i in range(1, steps + 1):
-            t = i / steps
-            poses.append((a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]),
-                          wrap_angle(a[2] + t * dyaw)))
-    arr = np.array(poses)
-    if len(arr) < 2:
-        return BaseTrajectory(arr, np.zeros(len(arr)))
-    step = np.diff(arr, axis=0)
-    turn = np.abs((step[:, 2] + math.pi) % (2 * math.pi) - math.pi)
-    dt = np.maximum(np.hypot(step[:, 0], step[:, 1]) / speed_m_s, turn / turn_rad_s)
-    return BaseTrajectory(arr, np.concatenate([[0.0], np.cumsum(dt)]))
 
 
 def time_along_path(names: Sequence[str], states: np.ndarray, arc_m: np.ndarray,
