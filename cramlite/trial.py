@@ -25,7 +25,7 @@ from cramlite.errors import SetupError
 from cramlite.plan_names import PLAN_NAMES  # noqa: F401  (re-exported)
 from cramlite.plans import PLANS
 from cramlite.scene.scene import PlanningScene
-from cramlite.scene.transforms import yaw_quat
+from cramlite.scene.transforms import quat_yaw, yaw_quat
 from cramlite.scene.validate import check_setup
 from cramlite.strategies import make_strategy
 from cramlite.world.setup import Setup, load_setup, resolve_setup_path
@@ -160,19 +160,30 @@ class TrialRunner:
         items, success = {}, True
         counter = self.scene.surface("counter")
         for spec in self.setup.items:
-            (x, y, z), _ = self.modules.object_pose(spec.name)
+            (x, y, z), orientation = self.modules.object_pose(spec.name)
+            model = self.scene.items[spec.name].model
             if plan != "clear-table":  # setting the table (or a user's plan): at the targets
                 off = math.dist((x, y), (spec.target.x, spec.target.y))
+                yaw_off = math.degrees(model.kind.yaw_error(quat_yaw(orientation),
+                                                            spec.target.yaw,
+                                                            model.yaw_symmetry_deg))
                 ok = off <= self.options.place_tolerance_m and \
-                    abs(z - spec.target.z) <= RESTING_TOLERANCE_M
+                    abs(z - spec.target.z) <= RESTING_TOLERANCE_M and \
+                    yaw_off <= self.options.yaw_tolerance_deg
                 items[spec.name] = {"position": [round(x, 4), round(y, 4), round(z, 4)],
-                                    "off_target_m": round(off, 4), "ok": ok}
+                                    "off_target_m": round(off, 4),
+                                    "off_yaw_deg": round(yaw_off, 2), "ok": ok}
             elif spec.container:  # clearing up: back into its drawer or cupboard
                 off = math.dist((x, y), (spec.pose.x, spec.pose.y))
+                yaw_off = math.degrees(model.kind.yaw_error(quat_yaw(orientation),
+                                                            spec.pose.yaw,
+                                                            model.yaw_symmetry_deg))
                 ok = off <= self.options.place_tolerance_m and \
-                    abs(z - spec.pose.z) <= RESTING_TOLERANCE_M
+                    abs(z - spec.pose.z) <= RESTING_TOLERANCE_M and \
+                    yaw_off <= self.options.yaw_tolerance_deg
                 items[spec.name] = {"position": [round(x, 4), round(y, 4), round(z, 4)],
-                                    "off_target_m": round(off, 4), "ok": ok}
+                                    "off_target_m": round(off, 4),
+                                    "off_yaw_deg": round(yaw_off, 2), "ok": ok}
             else:
                 ok = counter.contains_xy(x, y) and abs(z - counter.top_z) <= RESTING_TOLERANCE_M
                 items[spec.name] = {"position": [round(x, 4), round(y, 4), round(z, 4)], "ok": ok}

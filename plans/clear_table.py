@@ -20,7 +20,8 @@ COUNTER = "counter"
 def clear_table(ctx: RobotContext, setup: Setup, strategy: Strategy) -> PlanReport:
     """Stored items go back into their drawer or cupboard, where they were; the others to
     the counter (their own spot there first)."""
-    goals = {spec.name: ({"target": spec.pose.xyz} if spec.container else
+    goals = {spec.name: ({"target": spec.pose.xyz, "target_yaw": spec.pose.yaw}
+                         if spec.container else
                          {"surface": COUNTER, "preferred": spec.pose.xyz
                           if spec.surface == COUNTER else None}) for spec in setup.items}
     return fetch_in_strategy_order(ctx, setup, strategy, goals, PlanReport())

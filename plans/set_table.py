@@ -107,5 +107,6 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
 
 
 def set_table(ctx: RobotContext, setup: Setup, strategy: Strategy) -> PlanReport:
-    goals = {spec.name: {"target": spec.target.xyz} for spec in setup.items}
+    goals = {spec.name: {"target": spec.target.xyz, "target_yaw": spec.target.yaw}
+             for spec in setup.items}
     return fetch_in_strategy_order(ctx, setup, strategy, goals, PlanReport())

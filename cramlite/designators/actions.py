@@ -27,7 +27,7 @@ from cramlite.designators.failures import (
     PlacementFailed,
     PlanFailure,
 )
-from cramlite.designators.grasps import grasp_height_m, grasps_for, relative_pose
+from cramlite.designators.grasps import Grasp, item_grasps, relative_pose
 from cramlite.designators.locations import (
     PICK,
     PLACE,
@@ -52,7 +52,6 @@ from cramlite.motion.ik import ARMS
 from cramlite.motion.trajectory import wrap_angle
 from cramlite.process_cache import ProcessCache
 from cramlite.scene.robot_points import upper_body_parts, upper_body_points
-from cramlite.scene.transforms import quat_yaw
 from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT
 
 BasePose = tuple[float, float, float]
@@ -79,11 +78,24 @@ class ParkArmsAction:
             holding = ctx.holding.get(arm)
             if holding is not None:
                 torso = ctx.scene.joint_positions([TORSO_JOINT])[TORSO_JOINT]
-                carry = carry_joints(ctx, arm, holding.grasp, holding.grasp_height_m, torso)
+                carry = carry_joints(ctx, arm, holding.grasp.kind, holding.grasp.height_m,
+                                     torso)
+                if carry is not None and _tool_at(ctx, arm, carry):
+                    continue  # carried already (another configuration of the arm, maybe)
                 target = carry or target
             now = ctx.scene.joint_positions(list(target))
             if any(abs(wrap_angle(now[n] - v)) > PARKED_TOLERANCE_RAD for n, v in target.items()):
                 MoveArmJointsMotion(dict(target)).perform(ctx)
+
+
+def _tool_at(ctx: RobotContext, arm: str, joints: dict[str, float],
+             tolerance_m: float = 0.005, tolerance_rad: float = 0.05) -> bool:
+    """Is the arm's tool where `joints` would put it?"""
+    tool = f"{arm[0]}_gripper_tool_frame"
+    now, there = ctx.scene.link_matrix(tool), ctx.scene.link_matrix(tool, joints)
+    turn = float(np.linalg.norm(pin.log3(now[:3, :3].T @ there[:3, :3])))
+    return float(np.linalg.norm(now[:3, 3] - there[:3, 3])) <= tolerance_m and \
+        turn <= tolerance_rad
 
 
 @dataclass
@@ -135,23 +147,22 @@ class PickUpAction:
         reach = self.reach or self._resolve(ctx, obj)
         if reach.arm in ctx.holding:
             raise GraspFailed(f"the {reach.arm} hand is not free", obj=obj.name)
-        touch = (obj.name,)
-        MoveGripperMotion(reach.arm, "open", touch).perform(ctx)
-        MoveArmJointsMotion(reach.pre_joints, touch).perform(ctx)
-        MoveArmJointsMotion(reach.joints, touch).perform(ctx)
+        # the open fingers approach clear of the item (it is not a contact allowed)
+        MoveGripperMotion(reach.arm, "open").perform(ctx)
+        MoveArmJointsMotion(reach.pre_joints).perform(ctx)
+        MoveArmJointsMotion(reach.joints).perform(ctx)
         (bx, by, bz), orientation = obj.pose(ctx)
-        height = obj.height_m(ctx)
         tool = ctx.scene.tool_pose(reach.arm)  # (the measured joints' forward kinematics)
-        expected = (bx, by, bz + grasp_height_m(reach.grasp, height))
-        if math.dist(tool[0], expected) > GRASP_CHECK_M:
-            MoveArmJointsMotion(reach.pre_joints, touch).perform(ctx)
-            raise GraspFailed(f"gripper ended {math.dist(tool[0], expected) * 100:.1f} cm from "
-                              "the grasp point", obj=obj.name)
-        MoveGripperMotion(reach.arm, "close", touch).perform(ctx)
+        if math.dist(tool[0], reach.tool_position) > GRASP_CHECK_M:
+            MoveArmJointsMotion(reach.pre_joints).perform(ctx)
+            raise GraspFailed(f"gripper ended {math.dist(tool[0], reach.tool_position) * 100:.1f}"
+                              " cm from the grasp point", obj=obj.name)
+        # the fingers close until they touch it
+        MoveGripperMotion(reach.arm, "close", (obj.name,), width_m=reach.grasp.width_m,
+                          ).perform(ctx)
         AttachMotion(reach.arm, obj.name).perform(ctx)
         ctx.holding[reach.arm] = Holding(
-            obj.name, reach.grasp, grasp_height_m(reach.grasp, height),
-            yaw_offset=quat_yaw(orientation) - ctx.scene.base[2],
+            obj.name, reach.grasp,
             relative=relative_pose(_se3(tool), (bx, by, bz), orientation))
         try:
             MoveArmJointsMotion(reach.post_joints).perform(ctx)  # lift
@@ -174,13 +185,12 @@ class PickUpAction:
 
     def _resolve(self, ctx: RobotContext, obj: ObjectDesignator) -> ReachablePose:
         (x, y, z), orientation = obj.pose(ctx)
-        height = obj.height_m(ctx)
         base = ctx.scene.base
         tried = []
         for arm in self.arms or [a for a in ARMS if a not in ctx.holding]:
-            for grasp in self.grasps or grasps_for(height):
-                location = CostmapLocation((x, y, z), {grasp: grasp_height_m(grasp, height)},
-                                           obj.name, [arm], PICK, orientation=orientation)
+            for grasp in grasps_of(ctx, obj.name, self.grasps):
+                location = CostmapLocation((x, y, z), [grasp], obj.name, [arm], PICK,
+                                           orientation=orientation)
                 reach = location.reach_from(ctx, base, arm, grasp)
                 if reach is not None:
                     return reach
@@ -197,6 +207,8 @@ class PlaceAction:
     object: ObjectDesignator | ObjectDesignatorDescription | str  #: the held object
     target: Vec3  #: where the object's bottom centre goes
     reach: ReachablePose | None = None  #: checked joints from a location designator
+    #: The yaw it is to stand at (up to its symmetry); None: any.
+    yaw: float | None = None
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
@@ -224,8 +236,9 @@ class PlaceAction:
                                   f"{off * 100:.1f} cm from the place pose", obj=obj.name)
 
     def _resolve(self, ctx: RobotContext, arm: str, holding: Holding) -> ReachablePose:
-        location = CostmapLocation(self.target, {holding.grasp: holding.grasp_height_m},
-                                   holding.obj, [arm], PLACE, relative=holding.relative)
+        location = CostmapLocation(self.target, [holding.grasp], holding.obj, [arm], PLACE,
+                                   relative=holding.relative, target_yaw=self.yaw,
+                                   symmetry_deg=symmetry_of(ctx, holding.obj))
         reach = location.reach_from(ctx, ctx.scene.base, arm, holding.grasp)
         if reach is None:
             raise ObjectUnreachable("cannot reach the place pose from here", obj=holding.obj)
@@ -242,7 +255,9 @@ class TransportAction:
     surface: str | None = None  #: put it on a free spot of this surface instead
     preferred: Vec3 | None = None  #: with `surface`: spots nearest to this first
     arms: Sequence[str] | None = None  #: arms to consider (default both)
-    grasps: Sequence[str] | None = None  #: grasps to consider (default by shape)
+    grasps: Sequence[str] | None = None  #: grasp kinds to consider (default: its item's)
+    #: The yaw it is to stand at, at the target (up to its symmetry); None: any.
+    target_yaw: float | None = None
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
@@ -306,26 +321,24 @@ class TransportAction:
         container (at `local` in its inside's frame) is planned as if it were open."""
         from cramlite.designators.storage import container_of, virtually_open
         (x, y, z), orientation = obj.pose(ctx)
-        height = obj.height_m(ctx)
         tried: list[str] = []
         last: PlanFailure | None = None
-        grasps = list(self.grasps or _grasps_in(ctx, container_of(ctx, obj.name), z,
-                                                height))
+        grasps = _grasps_in(ctx, container_of(ctx, obj.name), z,
+                            grasps_of(ctx, obj.name, self.grasps))
         arms = [a for a in (self.arms or ARMS) if a not in ctx.holding]
-        location = CostmapLocation((x, y, z), {g: grasp_height_m(g, height) for g in grasps},
-                                   obj.name, arms, PICK, orientation=orientation)
+        location = CostmapLocation((x, y, z), grasps, obj.name, arms, PICK,
+                                   orientation=orientation)
         round_object = obj.is_round(ctx)
-        deliverable: dict[tuple[str, str, int], tuple[Vec3, ReachablePose] | None] = {}
+        deliverable: dict[tuple[str, Grasp, int], tuple[Vec3, ReachablePose] | None] = {}
         attempts = 0
         for reach in location.ground(ctx):
-            # put down from base yaw psi, the object will stand at psi + yaw_offset
-            yaw_offset = quat_yaw(orientation) - reach.base[2]
-            combo = (reach.arm, reach.grasp, 0 if round_object else round(yaw_offset * 18))
+            # held so: the object's yaw off the tool's decides how it can be put down
+            held_yaw = reach.item_yaw - reach.tool_yaw
+            combo = (reach.arm, reach.grasp, 0 if round_object else round(held_yaw * 18))
             if combo not in deliverable:
                 with virtually_open(ctx, closed) if closed else contextlib.nullcontext():
                     goal = _at(ctx, closed, local) if closed else target
-                    deliverable[combo] = self._plan_delivery(ctx, obj, reach, height,
-                                                             yaw_offset, goal)
+                    deliverable[combo] = self._plan_delivery(ctx, obj, reach, goal)
                 if deliverable[combo] is None:
                     tried.append(f"{reach.arm} arm {reach.grasp} grasp: could not put it down "
                                  "at the goal")
@@ -355,19 +368,19 @@ class TransportAction:
         raise cls(reason, obj=obj.name, tried=tried)
 
     def _plan_delivery(self, ctx: RobotContext, obj: ObjectDesignator, pick: ReachablePose,
-                       height: float, yaw_offset: float, target: Vec3 | None,
-                       ) -> tuple[Vec3, ReachablePose] | None:
+                       target: Vec3 | None) -> tuple[Vec3, ReachablePose] | None:
         """A spot of the goal (among its first few free ones) and a checked base pose from
         which the arm of `pick` puts the object down there, held as `pick` would hold it,
         clear of its neighbours."""
         placing = PlacingLocation(obj, target=target, surface=self.surface,
                                   preferred=self.preferred)
         for index, spot in enumerate(placing.ground(ctx)):
-            location = CostmapLocation(spot, {pick.grasp: grasp_height_m(pick.grasp, height)},
-                                       obj.name, [pick.arm], PLACE, relative=pick.relative,
-                                       max_ik_checks=12)
+            location = CostmapLocation(spot, [pick.grasp], obj.name, [pick.arm], PLACE,
+                                       relative=pick.relative, max_ik_checks=12,
+                                       target_yaw=self._yaw(target),
+                                       symmetry_deg=symmetry_of(ctx, obj.name))
             for reach in location.ground(ctx):
-                if placing.is_free(ctx, spot, reach.base[2] + yaw_offset):
+                if placing.is_free(ctx, spot, reach.item_yaw):
                     return spot, reach
             if index >= 2:
                 return None
@@ -391,7 +404,7 @@ class TransportAction:
                 continue
             try:
                 NavigateAction(reach.base).perform(ctx)
-                PlaceAction(obj, spot, reach=reach).perform(ctx)
+                PlaceAction(obj, spot, reach=reach, yaw=self._yaw(target)).perform(ctx)
                 ctx.note(f"placed {obj.name} at ({spot[0]:.2f}, {spot[1]:.2f}) from "
                          f"{reach.describe()}")
                 return
@@ -415,16 +428,21 @@ class TransportAction:
         placing = PlacingLocation(obj, target=target, surface=self.surface,
                                   preferred=self.preferred)
         for spot in placing.ground(ctx):
-            location = CostmapLocation(spot, {holding.grasp: holding.grasp_height_m},
-                                       obj.name, [arm], PLACE, relative=holding.relative,
-                                       max_ik_checks=12)
+            location = CostmapLocation(spot, [holding.grasp], obj.name, [arm], PLACE,
+                                       relative=holding.relative, max_ik_checks=12,
+                                       target_yaw=self._yaw(target),
+                                       symmetry_deg=symmetry_of(ctx, obj.name))
             found = False
             for reach in location.ground(ctx):
-                if placing.is_free(ctx, spot, reach.base[2] + holding.yaw_offset):
+                if placing.is_free(ctx, spot, reach.item_yaw):
                     found = True  # else, put down from there, it would touch a neighbour
                     yield spot, reach
             if not found:
                 yield spot, None
+
+    def _yaw(self, target: Vec3 | None) -> float | None:
+        """The yaw to put it down at: the target yaw, where there is a target."""
+        return self.target_yaw if target is not None else None
 
     def _put_back(self, ctx: RobotContext, obj: ObjectDesignator, origin: Vec3,
                   picked_from: ReachablePose) -> None:
@@ -435,7 +453,7 @@ class TransportAction:
             return
         try:
             NavigateAction(picked_from.base).perform(ctx)
-            PlaceAction(obj, origin).perform(ctx)
+            PlaceAction(obj, origin, yaw=picked_from.item_yaw).perform(ctx)
             ctx.note(f"put {obj.name} back at ({origin[0]:.2f}, {origin[1]:.2f})")
         except PlanFailure:
             if arm in ctx.holding:
@@ -464,17 +482,35 @@ def _at(ctx: RobotContext, container, local: Vec3) -> Vec3:
     return ctx.scene.inside_point(container, local)
 
 
-def _grasps_in(ctx: RobotContext, container, bottom_z: float, height: float) -> list[str]:
-    """The grasps for an object (by its height), without the front grasp where the object
-    lies in a drawer whose sides rise above that grasp (the fingers would have to pass
-    through them: every base pose would be tried and fail)."""
-    grasps = grasps_for(height)
-    if container is None or container.kind != "drawer" or "front" not in grasps:
+def grasps_of(ctx: RobotContext, name: str, kinds: Sequence[str] | None = None,
+              ) -> list[Grasp]:
+    """An item's grasps (of `kinds` only, if given), in order of preference."""
+    grasps = item_grasps(ctx.scene.items[name].model)
+    if kinds is None:
+        return grasps
+    chosen = [g for g in grasps if g.kind in kinds]
+    if not chosen:
+        raise GraspFailed(f"no {'/'.join(kinds)} grasp fits it (its grasps: "
+                          f"{', '.join(dict.fromkeys(g.kind for g in grasps))})", obj=name)
+    return chosen
+
+
+def symmetry_of(ctx: RobotContext, name: str) -> float:
+    """Degrees of a turn about +z that leave the item the same (0: any)."""
+    return ctx.scene.items[name].model.yaw_symmetry_deg
+
+
+def _grasps_in(ctx: RobotContext, container, bottom_z: float,
+               grasps: list[Grasp]) -> list[Grasp]:
+    """The grasps for an object, without the front grasps where the object lies in a
+    drawer whose sides rise above them (the fingers would have to pass through them:
+    every base pose would be tried and fail)."""
+    if container is None or container.kind != "drawer":
         return grasps
     rim = _at(ctx, container, container.inside_max)[2]
-    if bottom_z + grasp_height_m("front", height) < rim + FINGER_CLEARANCE_M:
-        return [g for g in grasps if g != "front"]
-    return grasps
+    kept = [g for g in grasps if g.kind != "front" or
+            bottom_z + g.height_m >= rim + FINGER_CLEARANCE_M]
+    return kept or grasps
 
 
 #: The fingers of a front grasp keep at least this much above a drawer's sides.

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from cramlite.backends.base import Backend, ProcessModules
+from cramlite.designators.grasps import Grasp
 from cramlite.designators.tasks import TaskTree
 from cramlite.motion.arm_planner import ArmMotionPlanner, ArmPlannerOptions
 from cramlite.motion.base_planner import BaseMotionPlanner, BasePlannerOptions
@@ -53,8 +54,10 @@ class ExecutionOptions:
 
     #: How many candidates (base poses, placements) an action tries before it gives up.
     max_candidates: int = 6
-    #: An object counts as placed if it rests within this distance of its target.
+    #: An object counts as placed if it rests within this distance of its target, turned
+    #: within this angle of its target yaw (up to its symmetry: a round one at any).
     place_tolerance_m: float = 0.05
+    yaw_tolerance_deg: float = 10.0
     #: Longest physics time to let a placed object settle (stops earlier once at rest).
     settle_s: float = 0.3
     #: Robot driving speed (the PR2's 3.6 km/h in the source) and base turn rate, and
@@ -83,11 +86,7 @@ class Holding:
     """An object in hand, how it was grasped, and where it came from."""
 
     obj: str
-    grasp: str
-    grasp_height_m: float
-    #: The object's yaw minus the base yaw it was grasped from: put down from base yaw
-    #: psi, it will stand at psi + yaw_offset.
-    yaw_offset: float = 0.0
+    grasp: Grasp
     #: The object's pose in the tool frame (measured when it was grasped).
     relative: tuple[Vec3, Quat] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
 

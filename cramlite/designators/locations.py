@@ -17,7 +17,7 @@ the placing tolerance), or on free spots of a surface, nearest to a preferred po
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,14 +25,19 @@ import pinocchio as pin
 
 from cramlite.designators.context import RobotContext
 from cramlite.designators.grasps import (
+    CARRY_BOTTOM_Z_M,
+    CARRY_LOWER_BOTTOMS_M,
     LIFT_M,
     PREGRASP_OFFSET_M,
     PREGRASP_RISE_M,
     RETREAT_RISE_M,
+    Grasp,
+    backed_off,
     carry_pose,
     in_base_frame,
     raised,
     relative_pose,
+    tool_for_item,
     tool_pose,
 )
 from cramlite.designators.motions import gripper_joints
@@ -69,13 +74,18 @@ class ReachablePose:
 
     base: BasePose
     arm: str
-    grasp: str
+    grasp: Grasp
     joints: dict[str, float]
     pre_joints: dict[str, float]
     post_joints: dict[str, float]
     relative: Relative
     #: Every motion between these configurations is a free straight joint-space path.
     straight: bool = True
+    #: The tool's yaw at the grasp (or place) and, placing, the item's yaw it gives.
+    tool_yaw: float = 0.0
+    item_yaw: float = 0.0
+    #: The tool frame at the grasp (or place): position in the world.
+    tool_position: Vec3 = (0.0, 0.0, 0.0)
 
     def describe(self) -> str:
         x, y, yaw = self.base
@@ -83,29 +93,33 @@ class ReachablePose:
 
 
 REJECTIONS = {"footprint": "base inside fixed geometry", "ik": "out of the arm's reach (IK)",
-              "arm collision": "arm or object would hit something"}
+              "arm collision": "arm or object would hit something",
+              "grasp yaw": "the grasp's tool yaw too far off the robot's heading"}
 
 
 class CostmapLocation:
     """Base poses from which one of `arms` reaches `point` (an object's bottom centre)
-    with one of the grasps in `grasp_heights` (grasp -> tool height above the point,
-    in order of preference), to pick `obj` up there or (`purpose=PLACE`) to put it down
-    there, held as `relative` (its pose in the tool frame)."""
+    with one of `grasps` (in order of preference), to pick `obj` up there (standing as
+    `orientation`) or (`purpose=PLACE`) to put it down there, held as `relative` (its pose
+    in the tool frame), turned to `target_yaw` or a turn of it by `symmetry_deg` (None:
+    any yaw)."""
 
-    def __init__(self, point: Vec3, grasp_heights: Mapping[str, float], obj: str,
+    def __init__(self, point: Vec3, grasps: Sequence[Grasp], obj: str,
                  arms: Sequence[str] = ARMS, purpose: str = PICK,
                  orientation: Quat = (0.0, 0.0, 0.0, 1.0), relative: Relative | None = None,
                  angle_step_deg: float = 10.0, max_ik_checks: int = 24,
-                 max_ik_checks_if_none: int = 48):
+                 max_ik_checks_if_none: int = 48, target_yaw: float | None = None,
+                 symmetry_deg: float = 360.0):
         if purpose not in (PICK, PLACE):
             raise ValueError(f"purpose must be {PICK!r} or {PLACE!r}")
         if purpose == PLACE and relative is None:
             raise ValueError("placing needs the object's pose in the tool frame (relative)")
         self.point = point
-        self.grasp_heights = dict(grasp_heights)
         self.obj = obj
         self.arms = list(arms)
-        self.grasps = list(self.grasp_heights)
+        self.grasps = list(grasps)
+        self.target_yaw = target_yaw
+        self.symmetry_deg = symmetry_deg
         self.purpose = purpose
         self.orientation = orientation
         self.relative = relative
@@ -116,7 +130,7 @@ class CostmapLocation:
         self.max_ik_checks_if_none = max(max_ik_checks, max_ik_checks_if_none)
         self.rejected: dict[str, int] = dict.fromkeys(REJECTIONS, 0)
 
-    def candidates(self, ctx: RobotContext) -> Iterator[tuple[float, BasePose, str, str]]:
+    def candidates(self, ctx: RobotContext) -> Iterator[tuple[float, BasePose, str, Grasp]]:
         """(score, base pose, arm, grasp), best (lowest) score first."""
         here = ctx.scene.base
         px, py, _ = self.point
@@ -149,6 +163,9 @@ class CostmapLocation:
         ik_checks, passed = 0, 0
         detours = []
         for _, base, arm, grasp in self.candidates(ctx):
+            if self.tool_at(base, arm, grasp) is None:  # (cheap: before the footprint)
+                self.rejected["grasp yaw"] += 1
+                continue
             if not ctx.base_checker().is_free(*base):
                 self.rejected["footprint"] += 1
                 continue
@@ -166,14 +183,16 @@ class CostmapLocation:
         yield from detours
 
     def reach_from(self, ctx: RobotContext, base: BasePose, arm: str,
-                   grasp: str) -> ReachablePose | None:
+                   grasp: Grasp) -> ReachablePose | None:
         """Every configuration for one base pose, solved and checked (None if one fails)."""
-        height = self.grasp_heights[grasp]
-        target = tool_pose(grasp, self.point, height, base[2])
+        posed = self.tool_at(base, arm, grasp)
+        if posed is None:
+            self.rejected["grasp yaw"] += 1
+            return None
+        target, tool_yaw, item_yaw = posed
         if self.purpose == PICK:
             relative = relative_pose(target, self.point, self.orientation)
-            pre = tool_pose(grasp, self.point, height, base[2], PREGRASP_OFFSET_M,
-                            PREGRASP_RISE_M)
+            pre = backed_off(target, grasp.kind, PREGRASP_OFFSET_M, PREGRASP_RISE_M)
             post = raised(target, LIFT_M)
             # (pose, holding it?) in the order the checks are cheapest to fail
             poses = {"joints": (target, False), "pre_joints": (pre, False),
@@ -181,19 +200,18 @@ class CostmapLocation:
         else:
             relative = self.relative
             pre = raised(target, LIFT_M)
-            post = tool_pose(grasp, self.point, height, base[2], PREGRASP_OFFSET_M,
-                             RETREAT_RISE_M)
+            post = backed_off(target, grasp.kind, PREGRASP_OFFSET_M, RETREAT_RISE_M)
             poses = {"joints": (target, True), "pre_joints": (pre, True),
                      "post_joints": (post, False)}
         torso = ctx.scene.joint_positions([TORSO_JOINT])[TORSO_JOINT]
-        checks = ConfigurationChecks(ctx, base, arm, self.obj, relative)
+        checks = ConfigurationChecks(ctx, base, arm, self.obj, relative, grasp)
         # keep the torso where it is (it moves at 1.3 cm/s); if that is out of reach or
         # collides, and the torso is not at the table-setting height, let it move there
         keep = [torso] + ([None] if abs(torso - TORSO_UP_M) > 0.01 else [])
         # the last solution's joints seed the solve (it converges in a few steps, near the
         # robot's way of reaching); if that solution is in the way of something, a solve
         # from the reaching start (elbow in, clear of tables) may not be
-        seed = ctx.ik_seeds.get((arm, grasp, self.purpose))
+        seed = ctx.ik_seeds.get((arm, grasp.kind, self.purpose))
         starts = [(fixed, seed) for fixed in keep]
         if seed is not None:
             starts.insert(1, (torso, None))
@@ -215,8 +233,8 @@ class CostmapLocation:
                 self.rejected["arm collision"] += 1
                 return None
         torso_after = solved["post_joints"][TORSO_JOINT]
-        park = (carry_joints(ctx, arm, grasp, height, torso_after) if self.purpose == PICK
-                else {**PARK_JOINTS[arm], TORSO_JOINT: torso_after})
+        park = (carry_joints(ctx, arm, grasp.kind, grasp.height_m, torso_after)
+                if self.purpose == PICK else {**PARK_JOINTS[arm], TORSO_JOINT: torso_after})
         if park is None or not checks.free(park, self.purpose == PICK):
             self.rejected["arm collision"] += 1
             return None
@@ -227,12 +245,37 @@ class CostmapLocation:
             legs = [(arrive, pre, False), (pre, at, False), (at, post, True),
                     (post, park, True)]
         else:
-            arrive = carry_joints(ctx, arm, grasp, height, torso) or pre
+            arrive = carry_joints(ctx, arm, grasp.kind, grasp.height_m, torso) or pre
             legs = [(arrive, pre, True), (pre, at, True), (at, post, False),
                     (post, park, False)]
         straight = all(checks.path_free(a, b, holding) for a, b, holding in legs)
-        ctx.ik_seeds[(arm, grasp, self.purpose)] = solved["joints"]
-        return ReachablePose(base, arm, grasp, at, pre, post, relative, straight)
+        ctx.ik_seeds[(arm, grasp.kind, self.purpose)] = solved["joints"]
+        return ReachablePose(base, arm, grasp, at, pre, post, relative, straight, tool_yaw,
+                             item_yaw, tuple(float(v) for v in target.translation))
+
+    def tool_at(self, base: BasePose, arm: str, grasp: Grasp,
+                ) -> tuple[pin.SE3, float, float] | None:
+        """The tool pose at the grasp (or place) from this base pose, its yaw and the
+        item's yaw; None if the grasp needs a tool yaw too far off the robot's heading."""
+        heading = base[2]
+        if grasp.kind == "rim":  # the rim point on the arm's side of the item
+            heading += math.pi if arm == "right" else 0.0
+        if self.purpose == PICK:
+            item_yaw = quat_yaw(self.orientation)
+            tool_yaw = grasp.tool_yaw(item_yaw, heading)
+            if tool_yaw is None:
+                return None
+            return tool_pose(grasp, self.point, tool_yaw), tool_yaw, item_yaw
+        held_yaw = held_item_yaw(self.relative, grasp.kind)  # the item's yaw off the tool's
+        if self.target_yaw is None:  # (any yaw will do)
+            tool_yaw = heading
+        else:
+            tool_yaw = grasp.place_yaw(self.target_yaw, held_yaw, heading, self.symmetry_deg)
+            if tool_yaw is None:
+                return None
+        item_yaw = tool_yaw + held_yaw
+        item = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, item_yaw), np.asarray(self.point, float))
+        return tool_for_item(item, self.relative), tool_yaw, item_yaw
 
     def _solve(self, ctx: RobotContext, arm: str, grasp: str, base: BasePose,
                torso: float | None, poses: dict[str, tuple[pin.SE3, bool]],
@@ -270,8 +313,22 @@ class CostmapLocation:
         if not total:
             return ""
         parts = ", ".join(f"{n} {REJECTIONS[k]}" for k, n in self.rejected.items() if n)
+        kinds = "/".join(dict.fromkeys(str(g) for g in self.grasps))
         return (f"{total} base poses {STANDOFFS_M[0]:.2f}-{STANDOFFS_M[-1]:.2f} m away "
-                f"({'/'.join(self.arms)} arm, {'/'.join(self.grasps)} grasp): {parts}")
+                f"({'/'.join(self.arms)} arm, {kinds} grasp): {parts}")
+
+
+def held_item_yaw(relative: Relative, kind: str) -> float:
+    """The yaw of an item held as `relative` (its pose in the tool frame) when the tool's
+    yaw is 0: the item's yaw is the tool's plus this."""
+    from cramlite.designators.grasps import TOOL_DOWN
+
+    (_, quat) = relative
+    x, y, z, w = quat
+    rel = pin.Quaternion(w, x, y, z).toRotationMatrix()
+    tool = np.eye(3) if kind == "front" else TOOL_DOWN
+    item = tool @ rel
+    return math.atan2(item[1, 0], item[0, 0])
 
 
 #: An arm reaching forward, elbow down (the right arm; the left one mirrored): the IK's
@@ -313,16 +370,19 @@ def _solve_carry(ctx: RobotContext, arm: str, grasp: str, grasp_height: float,
     rng = np.random.default_rng(0)
     seeds = [{**PARK_JOINTS[arm], TORSO_JOINT: torso_m}, reaching_seed(arm)]
     seeds += [ik.from_q(ik.random_q(rng)) for _ in range(CARRY_STARTS - len(seeds))]
-    best, best_low = None, -np.inf
-    for seed in seeds:
-        solution = ik.solve(carry_pose(grasp, grasp_height, arm), rng, seed,
-                            fixed_torso_m=torso_m, restarts=0)
-        if solution is None:
-            continue
-        low = _lowest_outside(ctx, solution.joints)
-        if low > best_low:
-            best, best_low = solution.joints, low
-    return best
+    for bottom in (CARRY_BOTTOM_Z_M, *CARRY_LOWER_BOTTOMS_M):  # (highest first)
+        best, best_low = None, -np.inf
+        for seed in seeds:
+            solution = ik.solve(carry_pose(grasp, grasp_height, arm, bottom), rng, seed,
+                                fixed_torso_m=torso_m, restarts=0)
+            if solution is None:
+                continue
+            low = _lowest_outside(ctx, solution.joints)
+            if low > best_low:
+                best, best_low = solution.joints, low
+        if best is not None:
+            return best
+    return None
 
 
 #: Carry poses kept for the process, at most 2 000.
@@ -349,8 +409,9 @@ class ConfigurationChecks:
     touched when not held."""
 
     def __init__(self, ctx: RobotContext, base: BasePose, arm: str, obj: str,
-                 relative: Relative | None):
+                 relative: Relative | None, grasp: Grasp | None = None):
         self.ctx = ctx
+        self.grasp = grasp
         self.base = base
         self.names = [TORSO_JOINT, *arm_joint_names(arm)]
         self.arm = arm
@@ -361,12 +422,12 @@ class ConfigurationChecks:
     def _scene(self, holding: bool):
         if holding not in self._scenes:
             # what is already in the other hand; the gripper closed on the object while
-            # it is held, open before and after
+            # it is held (the fingers touching it), open and clear of it before and after
             others = [h for h in self.ctx.held_objects() if h.name != self.obj]
+            closed = self.grasp.closing_angle if self.grasp is not None else None
             self._scenes[holding] = self.ctx.collisions.check(
-                self.names, (self.held if holding else []) + others,
-                ignore=() if holding else (self.obj,), base=self.base,
-                fixed=gripper_joints(self.arm, "close" if holding else "open"))
+                self.names, (self.held if holding else []) + others, base=self.base,
+                fixed=gripper_joints(self.arm, "close" if holding else "open", closed))
         return self._scenes[holding]
 
     def _vector(self, joints: dict[str, float]) -> np.ndarray:

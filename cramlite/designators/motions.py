@@ -21,13 +21,21 @@ from cramlite.designators.grasps import in_base_frame
 from cramlite.designators.tasks import recorded
 from cramlite.motion.base_timing import time_base_path
 from cramlite.motion.ik import arm_ik, arm_prefix
-from cramlite.motion.trajectory import BaseTrajectory, time_joint_path
+from cramlite.motion.trajectory import (
+    BaseTrajectory,
+    JointTrajectory,
+    densify,
+    time_along_path,
+    time_joint_path,
+)
+from cramlite.scene.gripper import gripper_geometry
 from cramlite.scene.models import pr2_model
 
 BasePose = tuple[float, float, float]
 #: The finger joint the others of a gripper follow (see the URDF's mimic tags).
 GRIPPER_LEADER = "gripper_l_finger_joint"
-GRIPPER_OPEN, GRIPPER_CLOSED = 0.5, 0.0
+#: Open: the finger joint's upper limit (the fingertips 9.2 cm apart); closed on nothing.
+GRIPPER_OPEN, GRIPPER_CLOSED = 0.548, 0.0
 
 
 def move_joints(ctx: RobotContext, joints: dict[str, float], allow_contact: Sequence[str] = (),
@@ -44,6 +52,17 @@ def move_joints(ctx: RobotContext, joints: dict[str, float], allow_contact: Sequ
     names = [names[i] for i in moving]
     start, goal = start[moving], goal[moving]
     check = ctx.collisions.check(names, ignore=allow_contact)
+    if check.moves_upright_items and \
+            ctx.arm_planner.plan(check, start, goal, ctx.rng, sample=False) is None:
+        # the straight joint path tips an upright item (or collides): move the tool along
+        # the straight line between its ends, turning only about the vertical, the joints
+        # from IK at each step (then OMPL, sampling only upright states, as a last resort)
+        kept = upright_path(ctx, check, names, start, goal)
+        if kept is not None:
+            ctx.arm_motions += 1
+            ctx.planned_motions += 1
+            ctx.move_joints(kept)
+            return
     path = ctx.arm_planner.plan(check, start, goal, ctx.rng)
     why = "" if path is not None else _why(check, start, goal, ctx)
     ctx.arm_motions += 1
@@ -51,6 +70,100 @@ def move_joints(ctx: RobotContext, joints: dict[str, float], allow_contact: Sequ
         raise MotionPlanningFailed(f"no collision-free path for {_joint_group(names)}{why}")
     ctx.planned_motions += path.planned
     ctx.move_joints(time_joint_path(names, path.vertices, ctx.limits))
+
+
+#: The tool's steps along an upright-keeping path (IK at each), and its speed there.
+UPRIGHT_STEP_M = 0.02
+UPRIGHT_STEP_RAD = 0.08
+UPRIGHT_SPEED_M_S = 0.25
+UPRIGHT_ACCEL_M_S2 = 0.5
+#: A joint that turns further than this between two of its IK steps: the IK switched
+#: branches (an elbow flipping), which is no straight tool motion.
+UPRIGHT_MAX_JUMP_RAD = 0.3
+
+
+def upright_path(ctx: RobotContext, check, names: list[str], start: np.ndarray,
+                 goal: np.ndarray) -> JointTrajectory | None:
+    """A timed joint path of one arm (and the torso) along which its tool moves straight
+    from where `start` puts it to where `goal` does, its orientation turned about the
+    vertical only (an upright item it holds stays upright), every state checked; None if
+    the arm cannot follow that line. Where IK cannot follow the whole line, the part it
+    can (from either end) is joined to the other end by the straight joint path, if that
+    keeps the item upright and is free too. It may end in another configuration of the
+    arm than `goal` that puts the tool at the same pose (IK followed the line there)."""
+    arms = {n[0] for n in names if n[:2] in ("r_", "l_")}
+    if len(arms) != 1:
+        return None
+    arm = "right" if arms == {"r"} else "left"
+    ik = arm_ik(arm)
+    if any(n not in ik.joint_names for n in names):
+        return None
+    now = ctx.scene.joint_positions(ik.joint_names)
+    first = {**now, **dict(zip(names, start, strict=True))}
+    last = {**now, **dict(zip(names, goal, strict=True))}
+    forward = _follow_line(ctx, ik, arm, names, first, last)
+    candidates = [forward]
+    if len(forward) < _line_steps(ctx, arm, first, last) + 1:  # IK gave up on the way
+        candidates.append(forward + [goal])
+        backward = _follow_line(ctx, ik, arm, names, last, first)
+        candidates.append([start] + backward[::-1])
+    for vertices in candidates:
+        if len(vertices) < 2:
+            continue
+        if np.max(np.abs(goal - vertices[-1])) <= UPRIGHT_MAX_JUMP_RAD:
+            vertices = [*vertices[:-1], goal]
+        dense, at = densify(np.array(vertices), ctx.limits.max_steps(names))
+        if not check.states_free(dense[1:]):
+            continue
+        # the tool's travel at each dense state, for one speed profile along the way
+        tool = f"{arm[0]}_gripper_tool_frame"
+        placed = [ctx.scene.link_matrix(tool, {**now, **dict(zip(names, q, strict=True))})
+                  for q in vertices]
+        steps = [float(np.linalg.norm(b[:3, 3] - a[:3, 3])) + 1e-6
+                 for a, b in zip(placed[:-1], placed[1:], strict=True)]
+        arc = np.interp(np.arange(len(dense)), at, np.concatenate([[0.0], np.cumsum(steps)]))
+        return time_along_path(names, dense, arc, ctx.limits, UPRIGHT_SPEED_M_S,
+                               UPRIGHT_ACCEL_M_S2)
+    return None
+
+
+def _line_steps(ctx: RobotContext, arm: str, first: dict[str, float],
+                last: dict[str, float]) -> int:
+    tool = f"{arm[0]}_gripper_tool_frame"
+    a, b = ctx.scene.link_matrix(tool, first), ctx.scene.link_matrix(tool, last)
+    turn = float(np.linalg.norm(pin.log3(a[:3, :3].T @ b[:3, :3])))
+    distance = float(np.linalg.norm(b[:3, 3] - a[:3, 3]))
+    return max(2, int(np.ceil(max(distance / UPRIGHT_STEP_M, turn / UPRIGHT_STEP_RAD))))
+
+
+def _follow_line(ctx: RobotContext, ik, arm: str, names: list[str], first: dict[str, float],
+                 last: dict[str, float]) -> list[np.ndarray]:
+    """Joint vectors (in `names` order) along the tool's straight line from where `first`
+    puts it toward where `last` does, IK at each step seeded by the step before (the
+    torso moving evenly); as far as IK follows without a jump."""
+    tool = f"{arm[0]}_gripper_tool_frame"
+    a, b = ctx.scene.link_matrix(tool, first), ctx.scene.link_matrix(tool, last)
+    turn = pin.log3(a[:3, :3].T @ b[:3, :3])
+    steps = _line_steps(ctx, arm, first, last)
+    torso = "torso_lift_joint"
+    vertices = [np.array([first[n] for n in names])]
+    seed = first
+    for k in range(1, steps + 1):
+        t = k / steps
+        rotation = a[:3, :3] @ pin.exp3(t * turn)
+        position = a[:3, 3] + t * (b[:3, 3] - a[:3, 3])
+        target = in_base_frame(pin.SE3(rotation, position), ctx.scene.base)
+        height = first[torso] + t * (last[torso] - first[torso])
+        solution = ik.solve(target, ctx.rng, seed, fixed_torso_m=height, restarts=0)
+        if solution is None:
+            break
+        q = np.array([solution.joints[n] for n in names])
+        q = ctx.limits.unwrap_goal(names, vertices[-1], q)  # (continuous joints: no spins)
+        if np.max(np.abs(q - vertices[-1])) > UPRIGHT_MAX_JUMP_RAD:
+            break
+        vertices.append(q)
+        seed = solution.joints
+    return vertices
 
 
 def _joint_group(names: Sequence[str]) -> str:
@@ -126,26 +239,32 @@ class MoveTorsoMotion:
         move_joints(ctx, {"torso_lift_joint": self.height_m})
 
 
-def gripper_joints(arm: str, state: str) -> dict[str, float]:
-    """The finger joints of a gripper open or closed: its leading joint and the five that
-    follow it (the URDF's mimic tags)."""
-    value = GRIPPER_OPEN if state == "open" else GRIPPER_CLOSED
+def gripper_joints(arm: str, state: str, closed_at: float | None = None) -> dict[str, float]:
+    """The finger joints of a gripper open or closed (on something: at the finger angle
+    `closed_at`, where the fingers touch it): its leading joint and the five that follow
+    it (the URDF's mimic tags)."""
+    closed = GRIPPER_CLOSED if closed_at is None else closed_at
+    value = GRIPPER_OPEN if state == "open" else closed
     return pr2_model().with_mimics({f"{arm_prefix(arm)}_{GRIPPER_LEADER}": value})
 
 
 @dataclass(frozen=True)
 class MoveGripperMotion:
-    """Open or close one gripper (its fingers follow a checked trajectory too)."""
+    """Open or close one gripper (its fingers follow a checked trajectory too); closing on
+    something `width_m` across, the fingers stop where they touch it."""
 
     arm: str
     state: str  # "open" | "close"
     allow_contact: tuple[str, ...] = ()
+    width_m: float | None = None
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
         if self.state not in ("open", "close"):
             raise ValueError(f"gripper state must be 'open' or 'close', got {self.state!r}")
-        move_joints(ctx, gripper_joints(self.arm, self.state), self.allow_contact)
+        closed_at = None if self.width_m is None else \
+            gripper_geometry().closing_angle(self.width_m)
+        move_joints(ctx, gripper_joints(self.arm, self.state, closed_at), self.allow_contact)
 
 
 @dataclass(frozen=True)

@@ -31,13 +31,14 @@ from cramlite.designators.failures import (
     ObjectNotFound,
     PlanFailure,
 )
-from cramlite.designators.grasps import in_base_frame
+from cramlite.designators.grasps import Grasp, in_base_frame
 from cramlite.designators.locations import CostmapLocation, reaching_seed
 from cramlite.designators.motions import MoveArmJointsMotion, MoveGripperMotion, gripper_joints
 from cramlite.designators.tasks import recorded
 from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names
 from cramlite.motion.trajectory import time_along_path, wrap_angle
 from cramlite.process_cache import ProcessCache
+from cramlite.scene.gripper import gripper_geometry
 from cramlite.scene.transforms import Vec3
 from cramlite.world.containers import Container
 from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT
@@ -45,6 +46,9 @@ from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT
 BasePose = tuple[float, float, float]
 #: Handle path samples: about this far apart along the handle's way.
 HANDLE_STEP_M = 0.02
+#: A handle's grasp (only its name is used: base poses around the handle are ranked as
+#: for any grasp).
+HANDLE = Grasp("handle", 0.0, 0.0, None)
 #: Pre-grasp and retreat: this far back from the handle along the approach.
 HANDLE_CLEARANCE_M = 0.10
 #: Base poses may face the handle up to this far off the container's front normal.
@@ -105,6 +109,29 @@ def _grasp_pose(scene, container: Container) -> pin.SE3:
     return frame * roll
 
 
+def handle_width(scene, container: Container) -> float:
+    """How wide a container's handle is between the fingers at the grasp: the extent,
+    along the direction the fingers close, of the handle's box that holds the grasp
+    point (the kitchen's handles are 2 cm bars)."""
+    key = ("handle width", container.name)
+    if key not in scene.cache:
+        closing = pin.rpy.rpyToMatrix(container.roll, 0.0, 0.0)[:, 1]  # tool y, link frame
+        point = np.asarray(container.grasp, dtype=float)
+        width = None
+        for shape in scene.kitchen.shapes_by_link.get(container.handle, []):
+            # (the handle link is fixed to the container's link, frames alike)
+            local = np.linalg.inv(shape.in_link)
+            inside = local[:3, :3] @ point + local[:3, 3] - shape.centre
+            if np.all(np.abs(inside) <= shape.half + 1e-6):
+                axis = shape.in_link[:3, :3].T @ closing
+                width = 2 * float(np.abs(axis) @ shape.half)
+                break
+        if width is None:
+            raise ValueError(f"{container.name}: no handle shape holds its grasp point")
+        scene.cache[key] = width
+    return scene.cache[key]
+
+
 def backed_off(pose: pin.SE3, distance: float) -> pin.SE3:
     return pin.SE3(pose.rotation, pose.translation - distance * pose.rotation[:, 0])
 
@@ -149,7 +176,7 @@ class AccessingLocation:
         facing = math.atan2(middle.rotation[1, 0], middle.rotation[0, 0])
         point = tuple(middle.translation)
         maps = self._stage_maps(ctx)
-        rings = CostmapLocation(point, {"handle": 0.0}, "", self.arms)
+        rings = CostmapLocation(point, [HANDLE], "", self.arms)
         checks = 0
         for _, base, arm, _ in rings.candidates(ctx):
             if abs(wrap_angle(base[2] - facing)) > MAX_SQUINT_RAD:
@@ -214,8 +241,9 @@ class AccessingLocation:
         gripper open at the pre-grasp and retreat, closed on the handle (which it may
         touch) in between."""
         container = self.container
+        closed = gripper_geometry().closing_angle(handle_width(ctx.scene, container))
         checks = {gripper: ctx.collisions.check(names, ignore=(container.handle,), base=base,
-                                                fixed=gripper_joints(arm, gripper))
+                                                fixed=gripper_joints(arm, gripper, closed))
                   for gripper in ("open", "close")}
         stages = [(pre, self.start, "open")]
         stages += [(dict(zip(names, q, strict=True)), float(v), "close")
@@ -404,7 +432,8 @@ def _follow(ctx: RobotContext, container: Container, access: AccessPose) -> None
     MoveArmJointsMotion(access.pre_joints, touch).perform(ctx)
     try:
         MoveArmJointsMotion(access.joints_at(0), touch).perform(ctx)
-        MoveGripperMotion(access.arm, "close", touch).perform(ctx)
+        MoveGripperMotion(access.arm, "close", touch,
+                          width_m=handle_width(ctx.scene, container)).perform(ctx)
         FollowHandleMotion(access, container.joint).perform(ctx)
     except PlanFailure:
         _let_go(ctx, container, access)

@@ -90,9 +90,10 @@ class ArmMotionPlanner:
         return scene.states_free(states, bisection_order(len(states)))
 
     def plan(self, scene: CollisionScene, start: Sequence[float], goal: Sequence[float],
-             rng: np.random.Generator) -> JointPath | None:
+             rng: np.random.Generator, sample: bool = True) -> JointPath | None:
         """A collision-free path from start to goal (joint order of the scene), or None.
-        The start is where the robot is and is not checked; the goal is."""
+        The start is where the robot is and is not checked; the goal is. Without `sample`
+        only the straight path is tried."""
         names = tuple(scene.joints)
         start = np.asarray(start, dtype=float)
         goal = self.limits.unwrap_goal(names, start, np.asarray(goal, dtype=float))
@@ -104,6 +105,8 @@ class ArmMotionPlanner:
             dense, _ = densify(np.vstack([start, goal]), steps)
             if self.states_free(scene, dense[1:-1]):
                 return JointPath(names, np.vstack([start, goal]), False, scene.checks - before)
+        if not sample:
+            return None
         seed = int(rng.integers(1, 2**31 - 1))
         # First OMPL checks its motions coarsely and keeps a margin, so the densified
         # result (checked at every step) passes; if the start or goal lies within the

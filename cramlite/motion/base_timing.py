@@ -303,7 +303,14 @@ def _passes(cap: list[float], ds: list[float], q1: list[list[float]],
         _, hi = _limits_at(q1[i], q2[i], b[i], limits, scale)
         b[i + 1] = min(b[i + 1], max(0.0, b[i] + 2 * max(hi, 0.0) * ds[i]))
     speed = np.sqrt(np.maximum(b, 0.0))
-    dt = 2 * np.asarray(ds) / np.maximum(speed[:-1] + speed[1:], 1e-12)
+    ds_arr = np.asarray(ds)
+    # a step between two points at rest (a stop right after a stop): speed up over its
+    # first half, slow down over the second (the constant-acceleration time is infinite)
+    accel = np.array([limits_decel(limits, q, scale) for q in q1[:-1]])
+    rest_to_rest = 2 * np.sqrt(ds_arr / np.maximum(accel, 1e-12))
+    moving = speed[:-1] + speed[1:]
+    dt = np.where(moving > 1e-9, 2 * ds_arr / np.maximum(moving, 1e-12), rest_to_rest)
+    dt = np.minimum(dt, rest_to_rest)
     return np.concatenate([[0.0], np.cumsum(dt)])
 
 

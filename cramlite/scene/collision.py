@@ -24,6 +24,7 @@ could lie inside a mesh the winding number of one of its points decides
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -391,6 +392,16 @@ class MotionCheck:
                               ).reshape(-1, 3)
         self._static_frames = scene.link_matrices(layout.static_links, self.values, self.base) \
             if layout.static_links else {}
+        #: upright held items that this motion moves: (frame row, the item's z axis in the
+        #: tool frame, cos of the largest tilt allowed, name)
+        self._upright = []
+        for h in held:
+            kind = scene.items[h.name].model.kind
+            if kind.upright and tool_frame(h.arm) in layout.links:
+                self._upright.append((layout.links.index(tool_frame(h.arm)),
+                                      np.asarray(h.relative)[:3, 2].copy(),
+                                      math.cos(math.radians(kind.upright_tolerance_deg)),
+                                      h.name))
         self._world_joints = dict(scene.belief.world_joints)
         self._place_obstacles()
 
@@ -521,6 +532,8 @@ class MotionCheck:
         if not len(states) or not len(self.parts):
             return True
         frames = self._link_frames(states)
+        if not self._kept_upright(frames):
+            return False
         near, meets, boxes = self._near(frames)
         flagged = set(np.flatnonzero(near.any(axis=(1, 2)) | meets.any(axis=1)).tolist())
         for i in (order if order is not None else range(len(states))):
@@ -536,11 +549,36 @@ class MotionCheck:
         if not len(self.parts):
             return True
         frames = self._link_frames(np.asarray(q, dtype=float)[None])
+        if not self._kept_upright(frames):
+            return False
         near, meets, boxes = self._near(frames, margin_m)
         if not near.any() and not meets.any():
             return True
         return self._state_free(frames[0], near[0], meets[0], margin_m,
                                 tuple(b[0] for b in boxes))
+
+    @property
+    def moves_upright_items(self) -> bool:
+        """Does this motion move an item that must stay upright?"""
+        return bool(self._upright)
+
+    def _kept_upright(self, frames: np.ndarray) -> bool:
+        """Every upright held item within its tilt at every state (S x L x 4 x 4)."""
+        for row, axis, cos_limit, _ in self._upright:
+            if np.any(frames[:, row, 2, :3] @ axis < cos_limit):
+                return False
+        return True
+
+    def tilts(self, q: Sequence[float]) -> list[tuple[str, float]]:
+        """(item, tilt in degrees) of every upright held item tilted beyond its limit at
+        q (for messages)."""
+        frames = self._link_frames(np.asarray(q, dtype=float)[None])
+        out = []
+        for row, axis, cos_limit, name in self._upright:
+            cz = float(frames[0, row, 2, :3] @ axis)
+            if cz < cos_limit:
+                out.append((name, math.degrees(math.acos(max(-1.0, min(1.0, cz))))))
+        return out
 
     def is_free_at(self, base: tuple[float, float, float], q: Sequence[float]) -> bool:
         """`is_free(q)` with the base at another pose (a check built without

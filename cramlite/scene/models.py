@@ -25,6 +25,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from cramlite.world.item_types import ItemType, item_type, item_type_file
 from cramlite.world.pr2 import PR2_URDF_SUBPATH, pr2_share_folder
 
 #: The kinds of shapes a link can have.
@@ -304,9 +305,14 @@ class ItemModel:
     type: str
     shapes: tuple[Shape, ...]
     extents: tuple[float, float, float]  #: x, y, z size of the upright item
-    round: bool  #: a single upright cylinder: turning it about z changes nothing
+    round: bool  #: turning it about z changes nothing (its yaw symmetry is "any")
     lowest_z: float  #: the bottom of its shapes (0 for the shipped items)
     urdf: Path = field(default=Path())
+    #: What its item file says (upright, grasps: see `cramlite.world.item_types`).
+    kind: ItemType = field(default_factory=ItemType)
+    #: Degrees of a turn about +z that leave it the same (0: any; 360: none): its item
+    #: file's, else its shape's (an upright cylinder: any; a square box: 90; a box: 180).
+    yaw_symmetry_deg: float = 360.0
 
 
 @functools.cache
@@ -329,10 +335,29 @@ def _item_model(urdf: str, digest: str, type_: str) -> ItemModel:
     pts = np.vstack(corners)
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     moved = tuple(_rebased(s, placements.get(s.link, np.eye(4)), root) for s in shapes)
-    round_ = len(shapes) == 1 and shapes[0].kind == CYLINDER and \
-        abs(moved[0].in_link[2, 2] - 1.0) < 1e-9
-    return ItemModel(type_, moved, tuple(float(v) for v in hi - lo), round_, float(lo[2]),
-                     Path(urdf))
+    kind = item_type(Path(urdf))
+    symmetry = kind.yaw_symmetry_deg
+    if symmetry is None:
+        symmetry = _shape_symmetry(moved)
+    return ItemModel(type_, moved, tuple(float(v) for v in hi - lo), symmetry == 0.0,
+                     float(lo[2]), Path(urdf), kind, symmetry)
+
+
+def _shape_symmetry(shapes: tuple[Shape, ...]) -> float:
+    """The yaw symmetry (degrees) of an item's shapes: 0 for an upright cylinder on its
+    axis, 90 / 180 for a box with a square / oblong footprint centred on it, else 360."""
+    if len(shapes) != 1:
+        return 360.0
+    shape = shapes[0]
+    upright = abs(shape.in_link[2, 2] - 1.0) < 1e-9
+    centred = np.allclose(shape.in_link[:2, 3], 0.0, atol=1e-9)
+    if not (upright and centred):
+        return 360.0
+    if shape.kind == CYLINDER:
+        return 0.0
+    if shape.kind == BOX:
+        return 90.0 if abs(shape.half[0] - shape.half[1]) < 1e-9 else 180.0
+    return 360.0
 
 
 def _rebased(shape: Shape, link_in_root: np.ndarray, root: str) -> Shape:
@@ -342,4 +367,7 @@ def _rebased(shape: Shape, link_in_root: np.ndarray, root: str) -> Shape:
 
 
 def item_model(urdf: Path, type_: str) -> ItemModel:
-    return _item_model(str(Path(urdf).resolve()), file_digest(urdf), type_)
+    """An item URDF's model (with its item file), once per content of both."""
+    sidecar = item_type_file(urdf)
+    digest = file_digest(urdf) + (file_digest(sidecar) if sidecar.is_file() else "")
+    return _item_model(str(Path(urdf).resolve()), digest, type_)

@@ -175,6 +175,9 @@ def load_setup(setup: str | Path) -> Setup:
     digest = hashlib.sha256(content)
     for urdf in (setup.world_urdf, *(item.urdf for item in setup.items)):
         digest.update(urdf.read_bytes())
+        sidecar = urdf.with_suffix(".yaml")  # (an item's type file: upright, grasps)
+        if urdf != setup.world_urdf and sidecar.is_file():
+            digest.update(sidecar.read_bytes())
     return _replace(setup, content_hash=digest.hexdigest()[:16])
 
 
