@@ -32,9 +32,10 @@ from cramlite.designators import (
     TryInOrder,
     simulated_robot,
 )
-from cramlite.designators.grasps import grasp_height_m
-from cramlite.designators.motions import AttachMotion, MoveArmJointsMotion
+from cramlite.designators.actions import grasps_of
+from cramlite.designators.motions import AttachMotion, MoveArmJointsMotion, gripper_joints
 from cramlite.motion.ik import arm_ik, tool_frame
+from cramlite.scene.gripper import gripper_geometry
 from cramlite.world import load_setup
 from tests.injected import NavigationFailsOnce
 
@@ -61,30 +62,35 @@ def test_costmap_location_offers_checked_reachable_poses(world) -> None:
         ParkArmsAction().perform(ctx)
         MoveTorsoAction(0.25).perform(ctx)
         # the cup right beside the milk: many arms that reach the milk would hit the cup
-        world.objects["cup"].set_pose((1.45, -0.04, 0.85))
+        world.objects["cup"].set_pose((1.45, -0.0625, 0.85))  # (1 cm beside it)
         ctx.observe()  # (the scene learns where it is now)
         position, orientation = world.objects["milk"].pose()
-        location = CostmapLocation(position, {"front": grasp_height_m("front", 0.2)}, "milk",
+        location = CostmapLocation(position, grasps_of(ctx, "milk", ["front"]), "milk",
                                    orientation=orientation)
         poses = list(location.ground(ctx))  # all it offers (up to its IK budget)
         print(location.rejected)
         assert location.rejected["arm collision"] > 0
         assert len(poses) >= 8 and len({(p.base, p.arm) for p in poses}) == len(poses)
+        parked = ctx.scene.joint_positions()  # (the other arm stays parked)
         for pose in poses:
             assert ctx.checker.is_free(*pose.base)
             world.robot.set_base_pose(*pose.base)
+            world.robot.set_joint_positions(parked)
             world.robot.set_joint_positions(pose.joints)
             tool, _ = world.robot.link_pose(tool_frame(pose.arm))
             assert math.dist(tool, (position[0], position[1], position[2] + 0.1)) < 0.005
-            # pre-grasp and grasp touch nothing but the milk; at the lift, the milk in hand
-            # touches nothing either
+            # pre-grasp and grasp (the fingers open around it) touch nothing, the milk
+            # included; at the lift, the milk in hand touches nothing either
             for joints, holding in ((pose.pre_joints, False), (pose.joints, False),
                                     (pose.post_joints, True)):
                 world.robot.set_joint_positions(joints)
+                closed = gripper_geometry().closing_angle(pose.grasp.width_m)
+                world.robot.set_joint_positions(  # (open on the way, closed on it held)
+                    gripper_joints(pose.arm, "close" if holding else "open", closed))
                 if holding:
                     tool = world.robot.link_pose(tool_frame(pose.arm))
                     world.objects["milk"].set_pose(*p.multiplyTransforms(*tool, *pose.relative))
-                found = deepest_contacts(world, {"milk"})
+                found = deepest_contacts(world, set() if not holding else {"milk"})
                 if holding:
                     found |= deepest_contacts(world, set(), body=world.objects["milk"].body)
                 print(pose.describe(), found)
@@ -102,13 +108,16 @@ def deepest_contacts(world, allowed: set[str], body: int | None = None) -> dict[
     for name, other in others.items():
         points = p.getClosestPoints(body, other, 0.0, physicsClientId=world.client)
         out[name] = max((-pt[8] for pt in points), default=0.0)
+        for pt in points:
+            if -pt[8] > 0.01:
+                print("DEEP", name, pt[3], pt[4], -pt[8], pt[5])
     return out
 
 
 def test_costmap_location_is_empty_for_an_unreachable_point(world) -> None:
     with simulated_robot(world) as ctx:
         behind_counter = (1.8, 0.0, 0.85)  # back of the counter: no base pose reaches it
-        location = CostmapLocation(behind_counter, {"front": 0.1}, "milk")
+        location = CostmapLocation(behind_counter, grasps_of(ctx, "milk", ["front"]), "milk")
         assert list(location.ground(ctx)) == []
         assert "base inside fixed geometry" in location.describe_rejections()
 

@@ -29,6 +29,7 @@ from cramlite.designators import (
 )
 from cramlite.designators.actions import update_carried
 from cramlite.designators.context import Holding, carried_map
+from cramlite.designators.grasps import Grasp
 from cramlite.motion.arm_planner import ArmMotionPlanner
 from cramlite.motion.trajectory import densify
 from cramlite.scene.collision import HeldObject
@@ -130,11 +131,11 @@ class RefusesFirstPlan(ArmMotionPlanner):
         super().__init__(planner.limits, planner.options)
         self.refused = 0
 
-    def plan(self, scene, start, goal, rng):
+    def plan(self, scene, start, goal, rng, **kwargs):
         if self.refused == 0 and len(scene.joints) >= 7:
             self.refused += 1
             return None
-        return super().plan(scene, start, goal, rng)
+        return super().plan(scene, start, goal, rng, **kwargs)
 
 
 def test_a_blocked_arm_motion_falls_through_to_another_candidate(world) -> None:
@@ -192,7 +193,7 @@ def test_held_objects_count_in_the_base_footprint_with_their_real_size(world) ->
         ctx.observe()
         ctx.modules.attach("right", "breakfast-cereal")
         ctx.scene.attach("right", "breakfast-cereal")
-        ctx.holding["right"] = Holding("breakfast-cereal", "front", 0.12)
+        ctx.holding["right"] = Holding("breakfast-cereal", Grasp("front", 0.12, 0.07, None))
         (cx, cy, _), _ = world.objects["breakfast-cereal"].pose()
         centre = [(cx, cy)]  # in the robot's frame (the robot stands at the origin)
         # driving up to the fridge (its front at x = 1.25), facing it
@@ -227,7 +228,7 @@ def test_wall_time_covers_planning() -> None:
     class SlowPlanner(ArmMotionPlanner):
         spent = 0.0
 
-        def plan(self, scene, start, goal, rng):
+        def plan(self, scene, start, goal, rng, **kwargs):
             begin = time.perf_counter()
             time.sleep(0.01)
             out = super().plan(scene, start, goal, rng)

@@ -61,3 +61,30 @@ def test_an_item_wholly_inside_a_moving_link_is_a_collision() -> None:
     assert not check.states_free(np.repeat(check.current()[None], 2, axis=0))
     scene.belief.poses["cup"] = ((bottom[0] + 1.0, bottom[1], bottom[2]), (0, 0, 0, 1.0))
     assert SceneCollisions(scene).check(["torso_lift_joint"]).is_free(check.current())
+
+
+def test_a_thin_wall_through_a_link_is_a_collision() -> None:
+    """The bowl's 6 mm walls are thinner than twice the tolerance: no point of the arm's
+    mesh can be deeper than 3 mm in one, yet a wall may cut right through the arm (an
+    audit of c3 found the upper arm 1.8 cm around a wall)."""
+    scene = PlanningScene(load_setup("v1"))
+    link = "r_forearm_link"
+    forearm = scene.robot.shapes_by_link[link][0]
+    placed = scene.link_matrices([link])[link] @ forearm.in_link
+    centre = placed[:3, :3] @ forearm.centre + placed[:3, 3]
+    bowl = scene.items["bowl"].model
+    wall = max(bowl.shapes, key=lambda s: s.in_link[0, 3])  # the wall at +x
+    assert min(wall.half) < TOLERANCE_M  # (thin)
+    # the wall's middle at the forearm's top surface: half of it inside, half out
+    top = max(v @ placed[:3, :3].T[:, 2] + placed[2, 3] for v in forearm.vertices)
+    bottom = np.array([centre[0], centre[1], top]) - wall.in_link[:3, 3]
+    scene.belief.poses["bowl"] = (tuple(float(v) for v in bottom), (0.0, 0.0, 0.0, 1.0))
+    check = SceneCollisions(scene).check(arm_joint_names("right"))
+    assert not check.is_free(check.current())
+    assert not check.states_free(np.repeat(check.current()[None], 2, axis=0))
+    # and the message says how deep: the wall's points inside the forearm
+    contact = max((c for c in check.contacts() if c.what == "r_forearm_link"),
+                  key=lambda c: c.depth_m)
+    assert contact.depth_m > 0.01, contact.describe()
+    scene.belief.poses["bowl"] = ((bottom[0], bottom[1], bottom[2] + 1.0), (0, 0, 0, 1.0))
+    assert SceneCollisions(scene).check(arm_joint_names("right")).is_free(check.current())

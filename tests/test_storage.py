@@ -288,14 +288,19 @@ def test_a_container_the_free_hand_cannot_open_is_opened_with_both_hands_free() 
 
 def test_an_item_in_a_drawer_is_not_grasped_from_the_front() -> None:
     """The fingers of a front grasp would pass through a drawer's sides: an item lying in a
-    drawer is offered the top grasp only (and its pick-up tries no front grasp); one in the
-    cupboard or on the counter keeps both."""
-    from cramlite.designators.actions import _grasps_in
+    drawer is offered grasps from above only; one in the cupboard or on the counter keeps
+    its front grasps."""
+    from cramlite.designators.actions import _grasps_in, grasps_of
     from cramlite.designators.storage import container_of
 
     with World.from_setup(load_setup("c1")) as world, simulated_robot(world) as ctx:
-        for name, expected in (("bowl", ["top"]), ("cup", ["front", "top"]),
-                               ("milk", ["front", "top"])):
-            lo, hi = world.objects[name].aabb()
-            assert _grasps_in(ctx, container_of(ctx, name), lo[2], hi[2] - lo[2]) == \
-                expected, name
+        drawer = container_of(ctx, "spoon")  # drawer_1
+        bottom = world.objects["spoon"].aabb()[0][2]
+        milk = grasps_of(ctx, "milk")
+        assert {g.kind for g in milk} == {"front", "top"}
+        assert {g.kind for g in _grasps_in(ctx, drawer, bottom, milk)} == {"top"}
+        assert _grasps_in(ctx, None, bottom, milk) == milk  # on a counter: all of them
+        for name in ("cup", "milk"):  # (in the cupboard, on the counter)
+            lo, _ = world.objects[name].aabb()
+            kept = _grasps_in(ctx, container_of(ctx, name), lo[2], grasps_of(ctx, name))
+            assert "front" in {g.kind for g in kept}, name

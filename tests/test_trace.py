@@ -104,7 +104,7 @@ def test_replay_check_finds_the_robot_inside_the_island(tmp_path: Path) -> None:
     # (depth: how far its deepest point is inside, 34.6 cm below the top and in from the sides)
     assert "base_link 34.6 cm inside island at t = 1.00 s (line 3)" in result.stdout
     clear = write(tmp_path / "clear.jsonl", [(0.0, [-0.2, -1.8, math.pi / 2]),
-                                             (1.0, [-0.2, -1.0, math.pi / 2])])
+                                             (2.0, [-0.2, -1.0, math.pi / 2])])  # (0.4 m/s^2)
     result = run_cli("replay", str(clear), "--check")
     assert result.returncode == 0 and "nothing penetrating" in result.stdout
 

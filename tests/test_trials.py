@@ -9,6 +9,7 @@ import pytest
 
 from cramlite.trace import read_trace
 from cramlite.trace.check import penetrations
+from cramlite.trace.physics import physics_findings
 from cramlite.trial import TrialRunner, run_trial
 from tests.conftest import run_cli
 
@@ -50,6 +51,10 @@ def test_baseline_and_opm_set_the_table_in_the_source_orders_and_nothing_goes_th
             assert recorded.duration_s == pytest.approx(result.drive_s + result.arm_s, rel=0.01)
             found = penetrations(recorded, substeps=2)
             assert found == [], [f.describe() for f in found]
+            # and physically possible: fingers at the surface of what they hold, upright
+            # items upright, the base within its accelerations, items turned as asked
+            physics = physics_findings(recorded)
+            assert physics == [], [f.describe() for f in physics]
 
 
 def test_same_seed_same_trial_in_a_reused_world() -> None:

@@ -57,6 +57,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
                              "with --gui", field="--gui")
     status = EXIT_OK
     if args.check:
+        from cramlite.trace.physics import physics_findings
         from cramlite.trace.replay import penetrations
 
         found = penetrations(trace, tolerance_m=args.tolerance_cm / 100)
@@ -65,7 +66,13 @@ def cmd_replay(args: argparse.Namespace) -> int:
         print(f"checked {len(trace.states)} states of {args.trace} and the motion between "
               f"them: {'nothing' if not found else len(found)} penetrating deeper than "
               f"{args.tolerance_cm:g} cm")
-        status = EXIT_PLAN_FAILED if found else EXIT_OK
+        physics = physics_findings(trace)
+        for finding in physics:
+            print(f"not physical: {finding.describe()}")
+        print(f"physics (fingers against what they hold, upright items, base accelerations, "
+              f"yaw at the targets): {'nothing' if not physics else len(physics)} "
+              "found")
+        status = EXIT_PLAN_FAILED if found or physics else EXIT_OK
     if args.out:
         from cramlite.trace.replay import frame_count, render_gif
 
@@ -92,8 +99,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
 def register(sub: argparse._SubParsersAction) -> None:
     replay: Parser = sub.add_parser(
         "replay", help=command_help("replay"),
-        description="Exit code 0: done (and, with --check, nothing inside anything), 1: --check "
-                    "found a penetration, 2: bad input (a malformed trace names its line).")
+        description="Exit code 0: done (and, with --check, nothing inside anything and "
+                    "nothing physically impossible), 1: --check found a penetration or a "
+                    "physics finding, 2: bad input (a malformed trace names its line).")
     replay.add_argument("trace", help="a trace file written by `cramlite run --trace` or "
                                       "`cramlite bench --traces`")
     replay.add_argument("--out", help="write an animated GIF here (headless)")
@@ -112,7 +120,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         help="re-check every state and the motion between them: no robot "
                              "link inside the kitchen, an item or the robot itself, no held "
                              "or standing item inside the kitchen or another item (the real "
-                             "meshes; independent of the planner's check)")
+                             "meshes; independent of the planner's check); and physics: "
+                             "fingertips at most 2 mm inside what they hold, upright items "
+                             "within their tilt, base accelerations within the header's "
+                             "limits, items at their targets within 10 degrees of yaw")
     replay.add_argument("--tolerance-cm", type=positive_float, default=1.0,
                         help="penetration allowed by --check (default 1 cm)")
     replay.set_defaults(func=cmd_replay)

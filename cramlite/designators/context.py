@@ -14,7 +14,7 @@ from __future__ import annotations
 import contextlib
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -280,7 +280,8 @@ class RobotContext:
                                                j.upper if math.isfinite(j.upper) else None,
                                                j.velocity]
                                            for n, j in robot.joints.items()
-                                           if n in self.trace_joints}}}
+                                           if n in self.trace_joints}},
+                "base_limits": asdict(self.options.base_limits)}
 
     def open_trace(self, path: str | Path, setup: str, plan: str, strategy: str,
                    seed: int, backend: str = "") -> TraceWriter:

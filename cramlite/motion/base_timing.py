@@ -81,7 +81,7 @@ def corners(poses: np.ndarray, scale: float) -> np.ndarray:
     last, and every pose where the direction changes), in the scaled space (x, y, scale *
     unwrapped yaw)."""
     z = _scaled(poses, scale)
-    if len(z) < 3:
+    if len(z) < 2:
         return z
     steps = np.diff(z, axis=0)
     lengths = np.linalg.norm(steps, axis=1)
@@ -243,6 +243,8 @@ def _dense(pieces: list[_Piece], scale: float,
     z = np.array(points)
     n = len(z)
     q1, q2 = np.zeros((n, 3)), np.zeros((n, 3))
+    if n < 2:
+        return z, q1, q2, [0]
     # tangents and curvature by differences along the dense points (exact on straight
     # stretches; on the blends as close as their sampling)
     step = np.diff(z, axis=0)
@@ -266,6 +268,9 @@ def _timed(pieces: list[_Piece], limits: BaseLimits, stops: tuple[int, ...]) -> 
     scale = limits.yaw_scale_m
     z, tangents, bends, rests = _dense(pieces, scale)
     n = len(z)
+    if n < 2:  # (every piece of no length: it stands where it is)
+        pose = _unscaled(z, scale)
+        return TimedBasePath(pose, np.zeros(len(pose)))
     ds = np.linalg.norm(np.diff(z, axis=0), axis=1).tolist()
     q1, q2 = tangents.tolist(), bends.tolist()
     cap = [_speed_cap(q1[i], q2[i], limits, scale) for i in range(n)]

@@ -195,10 +195,12 @@ class SceneCollisions:
         if meshes:
             mesh, pm, prim, pp = (a, pa, b, pb) if a.kind == MESH else (b, pb, a, pa)
             points = self.samples_near(mesh, pm, prim, pp)
-            if not len(points):
-                return 0.0
-            local = (points - pp[:3, 3]) @ pp[:3, :3]
-            return float(primitive_depth(local, prim).max())
+            deepest = 0.0
+            if len(points):
+                local = (points - pp[:3, 3]) @ pp[:3, :3]
+                deepest = float(primitive_depth(local, prim).max())
+            # (and the primitive's points in the mesh: a thin wall may pass through it)
+            return max(deepest, _depth_in_mesh(self, prim, pp, mesh, pm))
         return _primitive_pair_depth(self, a, pa, b, pb)
 
     def hull(self, shape: Shape) -> tuple[np.ndarray, np.ndarray]:
@@ -646,13 +648,18 @@ class MotionCheck:
         # than that in the primitive exactly where the mesh meets the primitive shrunk by it
         prim_first = a.kind != MESH
         eroded = owner.eroded(a if prim_first else b, limit)
-        if eroded is not None:
-            if prim_first:
-                coal.collide(eroded, ta, b.geometry, tb, owner.request, result)
-            else:
-                coal.collide(a.geometry, ta, eroded, tb, owner.request, result)
-            if result.isCollision():
-                return True
+        if eroded is None:
+            # a primitive thinner than twice the limit (a bowl's 6 mm wall): no point of the
+            # mesh can be deeper in it than that, yet the wall may pass right through the
+            # mesh (its own points deep inside): any contact counts
+            coal.collide(a.geometry, ta, b.geometry, tb, owner.request, result)
+            return result.isCollision() or (nested() and owner.enclosed(a, pa, b, pb))
+        if prim_first:
+            coal.collide(eroded, ta, b.geometry, tb, owner.request, result)
+        else:
+            coal.collide(a.geometry, ta, eroded, tb, owner.request, result)
+        if result.isCollision():
+            return True
         return (nested() and owner.enclosed(a, pa, b, pb))
 
     def _allowance(self, obstacle: _Obstacle | None, part: _Part,
@@ -723,21 +730,26 @@ def _mesh_depth(owner: SceneCollisions, a: Shape, pa: np.ndarray, b: Shape,
                 pb: np.ndarray) -> float:
     """How deep two crossing meshes are inside each other: the largest distance from the
     other's surface of the surface points of one that lie inside the other."""
-    deepest = 0.0
-    for inner, pi, outer, po in ((a, pa, b, pb), (b, pb, a, pa)):
-        points = owner.samples_near(inner, pi, outer, po)
-        if not len(points):
-            continue
-        local = (points - po[:3, 3]) @ po[:3, :3]
-        box = np.all(np.abs(local - outer.centre) <= outer.half + 1e-9, axis=1)
-        if not box.any():
-            continue
-        candidates = local[box]
-        inside = np.abs(winding_numbers(candidates, outer.vertices, outer.triangles)) > 0.5
-        if inside.any():
-            deepest = max(deepest, float(point_triangle_distances(
-                candidates[inside], outer.vertices, outer.triangles).max()))
-    return deepest
+    return max(_depth_in_mesh(owner, a, pa, b, pb), _depth_in_mesh(owner, b, pb, a, pa))
+
+
+def _depth_in_mesh(owner: SceneCollisions, inner: Shape, pi: np.ndarray, outer: Shape,
+                   po: np.ndarray) -> float:
+    """The largest distance from a mesh's (`outer`) surface of the surface points of
+    another shape that lie inside it."""
+    points = owner.samples_near(inner, pi, outer, po)
+    if not len(points):
+        return 0.0
+    local = (points - po[:3, 3]) @ po[:3, :3]
+    box = np.all(np.abs(local - outer.centre) <= outer.half + 1e-9, axis=1)
+    if not box.any():
+        return 0.0
+    candidates = local[box]
+    inside = np.abs(winding_numbers(candidates, outer.vertices, outer.triangles)) > 0.5
+    if not inside.any():
+        return 0.0
+    return float(point_triangle_distances(candidates[inside], outer.vertices,
+                                          outer.triangles).max())
 
 
 def _primitive_pair_depth(owner: SceneCollisions, a: Shape, pa: np.ndarray, b: Shape,

@@ -38,6 +38,7 @@ def check_setup(scene: PlanningScene) -> None:
     def fail(fld: str, message: str) -> SetupError:
         return SetupError(message, source=src, field=fld)
 
+    _check_graspable(scene, fail)
     collisions = SceneCollisions(scene)
     surfaces = scene.surfaces()
     for i, spec in enumerate(setup.items):
@@ -106,6 +107,18 @@ def _robot_parked(scene: PlanningScene) -> Placed:
                                  (start.x, start.y, start.yaw))
     return [(shape, frames[link] @ shape.in_link)
             for link, shapes in scene.robot.shapes_by_link.items() for shape in shapes]
+
+
+def _check_graspable(scene: PlanningScene, fail) -> None:
+    """Every item has a grasp the gripper can make (its item file's kinds, its widths)."""
+    from cramlite.designators.grasps import item_grasps  # (what a hand can do with it)
+
+    for i, spec in enumerate(scene.setup.items):
+        try:
+            item_grasps(scene.items[spec.name].model)
+        except SetupError as exc:
+            raise fail(f"items[{i}].type", f"item {spec.name!r}: {exc.detail} (from "
+                                           f"{exc.source})") from None
 
 
 def _check_in_container(scene: PlanningScene, spec: ItemSpec, src: str, where: str) -> None:

@@ -35,7 +35,7 @@ TRACE_FORMAT = "cramlite-trace/2"
 READ_FORMATS = ("cramlite-trace/1", TRACE_FORMAT)
 HEADER_KEYS = ("format", "setup", "plan", "strategy", "seed", "joints", "world_joints")
 #: What /2 adds to the header (optional on reading: /1 has none of them).
-HEADER_KEYS_2 = ("backend", "cramlite", "robot")
+HEADER_KEYS_2 = ("backend", "cramlite", "robot", "base_limits")
 STATE_KEYS = ("t", "base", "q", "w", "held", "objects", "action")
 DIGITS = 6
 

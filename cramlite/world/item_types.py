@@ -1,6 +1,7 @@
 """Item types: what an item's URDF cannot say, in a YAML file beside it (`cup.urdf` ->
-`cup.yaml`): whether it must be carried upright (and how far it may tilt), which turns
-about its vertical axis leave it looking the same (what "at its target yaw" means), and
+`cup.item.yaml`; ".item" keeps it apart from a setup file beside it): whether it must be
+carried upright (and how far it may tilt), which turns about its vertical axis leave it
+looking the same (what "at its target yaw" means), and
 which grasps suit it. Every key is optional; an item without the file is not upright,
 has the symmetry its shape has, and may be grasped any way that fits the gripper.
 
@@ -52,7 +53,7 @@ class ItemType:
 
 
 def item_type_file(urdf: Path) -> Path:
-    return Path(urdf).with_suffix(".yaml")
+    return Path(urdf).with_suffix(".item.yaml")
 
 
 @functools.cache

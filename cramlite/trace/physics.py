@@ -1,0 +1,208 @@
+"""`replay --check`, part two: is what was executed physically possible for the robot?
+
+From the recorded states alone (no planner code):
+
+- grip: the fingertips of a gripper are at most `GRIP_TOLERANCE_M` inside what it holds
+  (an item, or a drawer's or door's handle while the action opening or closing it runs
+  and the fingers are not open):
+  held, not magnetised; measured as the collision check measures (surface points);
+- tilt: an item whose item file says it stays upright never tilts by more than its
+  tolerance (held or standing);
+- base: the base's accelerations, by finite differences of consecutive states (from rest
+  before the first and to rest after the last), within the limits the trace's header
+  states (or cramlite's defaults), with `ACCEL_TOLERANCE` for the differencing;
+- yaw: at the end, an item put at a target of the setup (setting the table; clearing up
+  into its container) stands within `YAW_TOLERANCE_DEG` of the target's yaw, up to the
+  item's symmetry.
+
+Each finding names the thing, the value and the limit, the robot time and the trace line.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from cramlite.motion.base_timing import BaseLimits
+from cramlite.scene.transforms import pose_matrix, quat_yaw
+from cramlite.trace.check import TraceChecker, checker_for, penetration
+from cramlite.trace.format import Trace
+
+GRIP_TOLERANCE_M = 0.002
+#: Finite differences of states that step at most 2 cm may overshoot a profile that keeps
+#: the limits by up to this share of the limit.
+ACCEL_TOLERANCE = 0.05
+YAW_TOLERANCE_DEG = 10.0
+FINGERTIPS = ("gripper_l_finger_tip_link", "gripper_r_finger_tip_link")
+#: A gripper whose fingers are open this far or wider grips nothing (an open hand that
+#: brushes a handle on its way is a contact, judged by the penetration check).
+OPEN_FINGER_RAD = 0.54
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One thing the robot could not have done so."""
+
+    kind: str  #: grip | tilt | base acceleration | yaw
+    what: str
+    value: float
+    limit: float
+    unit: str
+    t: float
+    line: int
+
+    def describe(self) -> str:
+        return (f"{self.kind}: {self.what}: {self.value:g} {self.unit} (at most {self.limit:g} "
+                f"{self.unit}) at t={self.t:.2f} s, line {self.line}")
+
+
+def physics_findings(trace: Trace, checker: TraceChecker | None = None) -> list[Finding]:
+    """Every finding of the checks above (the worst of each kind and thing)."""
+    checker = checker or checker_for(trace)
+    worst: dict[tuple[str, str], Finding] = {}
+
+    def note(finding: Finding) -> None:
+        key = (finding.kind, finding.what)
+        if key not in worst or finding.value > worst[key].value:
+            worst[key] = finding
+
+    for finding in _grips(trace, checker):
+        note(finding)
+    for finding in _tilts(trace, checker):
+        note(finding)
+    for finding in _base_accelerations(trace):
+        note(finding)
+    for finding in _yaws(trace, checker):
+        note(finding)
+    return sorted(worst.values(), key=lambda f: (f.kind, -f.value))
+
+
+def _finger(trace: Trace, state: dict, arm: str) -> float:
+    """The leading finger joint's angle of a gripper (open if the trace has none)."""
+    name = f"{arm[0]}_gripper_l_finger_joint"
+    joints = trace.header["joints"]
+    return float(state["q"][joints.index(name)]) if name in joints else math.inf
+
+
+def _depth(tip, placed: np.ndarray, body, where: np.ndarray, cache: dict) -> float:
+    """How deep a fingertip is inside a body; while an item is held its fingertips keep
+    their pose relative to it, so the answer is kept per relative pose (to 0.1 mm)."""
+    relative = np.linalg.solve(where, placed)
+    key = (id(tip), id(body), np.round(relative[:3], 4).tobytes())
+    if key not in cache:
+        cache[key] = penetration(tip, placed, body, where, np.full(3, -1e9),
+                                 np.full(3, 1e9), GRIP_TOLERANCE_M)
+    return cache[key]
+
+
+def _grips(trace: Trace, checker: TraceChecker):
+    handles = checker.handles
+    cache: dict = {}
+    for i, state in enumerate(trace.states):
+        held = state["held"]
+        action = state.get("action") or {}
+        gripped = handles.get(action.get("object"))
+        if not held and gripped is None:
+            continue
+        robot = checker.robot_frames(state)
+        grips: list[tuple[str, list]] = []
+        for name, arm in held.items():
+            if name in state["objects"]:
+                frame = pose_matrix(state["objects"][name][:3], state["objects"][name][3:])
+                grips.append((arm, [(body, frame @ body.shape.in_link)
+                                    for body in checker.item_bodies[name]]))
+        closing = [arm for arm in ("right", "left") if arm not in held.values()
+                   and _finger(trace, state, arm) < OPEN_FINGER_RAD]
+        if gripped is not None and closing:
+            kitchen = checker.kitchen_frames(state)
+            bodies = [(body, kitchen[body.owner] @ body.shape.in_link)
+                      for body in checker.kitchen_bodies if body.owner == gripped]
+            grips += [(arm, bodies) for arm in closing]
+        for arm, bodies in grips:
+            for tip in FINGERTIPS:
+                link = f"{arm[0]}_{tip}"
+                for tip_body in (b for b in checker.robot_bodies if b.owner == link):
+                    placed = robot[link] @ tip_body.shape.in_link
+                    for body, where in bodies:
+                        depth = _depth(tip_body, placed, body, where, cache)
+                        if depth > GRIP_TOLERANCE_M:
+                            yield Finding("grip", f"{link} inside {body.label}",
+                                          round(depth * 1000, 1), GRIP_TOLERANCE_M * 1000,
+                                          "mm", state["t"], i + 2)
+
+
+def _tilts(trace: Trace, checker: TraceChecker):
+    upright = {name: math.radians(model.kind.upright_tolerance_deg)
+               for name, model in checker.items.items() if model.kind.upright}
+    for i, state in enumerate(trace.states):
+        for name, limit in upright.items():
+            pose = state["objects"].get(name)
+            if pose is None:
+                continue
+            frame = pose_matrix(pose[:3], pose[3:])
+            tilt = math.acos(max(-1.0, min(1.0, float(frame[2, 2]))))
+            if tilt > limit + 1e-6:
+                yield Finding("tilt", name, round(math.degrees(tilt), 1),
+                              round(math.degrees(limit), 1), "deg", state["t"], i + 2)
+
+
+def _base_accelerations(trace: Trace):
+    header = trace.header.get("base_limits") or {}
+    limits = BaseLimits(**{k: float(v) for k, v in header.items()
+                           if k in BaseLimits.__dataclass_fields__})
+    states = trace.states
+    if len(states) < 2:
+        return
+    t = np.array([s["t"] for s in states])
+    base = np.array([s["base"] for s in states], dtype=float)
+    base[:, 2] = np.unwrap(base[:, 2])
+    dt = np.diff(t)
+    step = np.diff(base, axis=0)
+    moving = np.any(np.abs(step) > 1e-9, axis=1)
+    # velocity of each step (0 where the base stands); a step of no time that moves it
+    # is a jump (infinite acceleration)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = np.where(dt[:, None] > 1e-9, step / dt[:, None], 0.0)
+    for k in np.flatnonzero(moving & (dt <= 1e-9)):
+        yield Finding("base acceleration", "a jump of the base", math.inf,
+                      limits.accel_m_s2, "m/s^2", float(t[k + 1]), int(k) + 3)
+    v = np.vstack([np.zeros(3), v, np.zeros(3)])
+    half = np.concatenate([[0.0], dt, [0.0]])
+    gap = (half[:-1] + half[1:]) / 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(gap[:, None] > 1e-9, np.diff(v, axis=0) / gap[:, None], 0.0)
+    xy, yaw = np.hypot(a[:, 0], a[:, 1]), np.abs(a[:, 2])
+    for values, limit, what, unit in ((xy, limits.accel_m_s2, "driving", "m/s^2"),
+                                      (yaw, limits.turn_accel_rad_s2, "turning", "rad/s^2")):
+        over = np.flatnonzero(values > limit * (1 + ACCEL_TOLERANCE) + 1e-6)
+        for k in over:
+            line = int(min(k, len(states) - 1)) + 2
+            yield Finding("base acceleration", what, round(float(values[k]), 2),
+                          round(limit, 2), unit, float(t[min(k, len(t) - 1)]), line)
+
+
+def _yaws(trace: Trace, checker: TraceChecker):
+    if not trace.states:
+        return
+    plan = trace.header.get("plan")
+    last = trace.states[-1]
+    for spec in checker.setup.items:
+        if plan == "set-table":
+            target = spec.target
+        elif plan == "clear-table" and spec.container:
+            target = spec.pose
+        else:
+            continue
+        pose = last["objects"].get(spec.name)
+        if pose is None or spec.name in last["held"]:
+            continue
+        if math.dist(pose[:2], (target.x, target.y)) > 0.1:
+            continue  # not put there (the trial's result says so; no yaw to judge)
+        model = checker.items[spec.name]
+        error = math.degrees(model.kind.yaw_error(quat_yaw(pose[3:]), target.yaw,
+                                                  model.yaw_symmetry_deg))
+        if error > YAW_TOLERANCE_DEG:
+            yield Finding("yaw", f"{spec.name} at its target", round(error, 2),
+                          YAW_TOLERANCE_DEG, "deg", last["t"], len(trace.states) + 1)

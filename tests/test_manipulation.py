@@ -1,0 +1,164 @@
+"""Honest manipulation: grasps the PR2 gripper can make, a hollow bowl held by its rim,
+upright items kept upright where a straight joint path would tip them (kinematic
+backend: these are about planning, and run on every Python)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from cramlite.backends import load_backend
+from cramlite.designators import (
+    CostmapLocation,
+    MoveTorsoAction,
+    NavigateAction,
+    ParkArmsAction,
+    PickUpAction,
+    simulated_robot,
+)
+from cramlite.designators.actions import grasps_of
+from cramlite.designators.grasps import CLEARANCE_M, item_grasps
+from cramlite.designators.motions import MoveArmJointsMotion
+from cramlite.motion.ik import arm_ik
+from cramlite.scene.gripper import gripper_geometry
+from cramlite.scene.models import item_model
+from cramlite.trace import read_trace
+from cramlite.trace.check import checker_for
+from cramlite.trace.physics import physics_findings
+from cramlite.trial import TrialRunner
+from cramlite.world import load_setup
+from tests.conftest import ROOT, run_cli
+
+ITEMS = ROOT / "worlds" / "items"
+
+
+def test_every_grasp_fits_the_open_gripper_and_the_cereal_is_taken_across_7_cm() -> None:
+    fits = gripper_geometry().max_gap - 2 * CLEARANCE_M
+    assert 0.080 < fits < 0.084  # (9.2 cm open, 5 mm to spare each side)
+    for name in ("breakfast-cereal", "milk", "cup", "bowl", "spoon"):
+        grasps = item_grasps(item_model(ITEMS / f"{name}.urdf", name))
+        assert grasps and all(g.width_m <= fits for g in grasps), name
+    cereal = item_grasps(item_model(ITEMS / "breakfast-cereal.urdf", "breakfast-cereal"))
+    assert {round(g.width_m, 3) for g in cereal} == {0.07}  # never across its 19 cm
+    assert {g.kind for g in item_grasps(item_model(ITEMS / "bowl.urdf", "bowl"))} == {"rim"}
+
+
+def test_a_setup_with_an_item_the_gripper_cannot_hold_is_refused_naming_its_widths(
+        tmp_path: Path) -> None:
+    crate = (ITEMS / "milk.urdf").read_text().replace('"0.075 0.075 0.2"', '"0.15 0.12 0.2"')
+    (tmp_path / "crate.urdf").write_text(crate.replace('name="milk"', 'name="crate"'))
+    text = (ROOT / "worlds" / "setups" / "v1.yaml").read_text()
+    text = text.replace("type: milk ", f"type: {tmp_path / 'crate.urdf'} ")
+    assert str(tmp_path / "crate.urdf") in text
+    setup = tmp_path / "crate.yaml"
+    setup.write_text(text)
+    done = run_cli("run", str(setup), "--backend", "kinematic")
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert "Traceback" not in done.stderr
+    message = done.stderr
+    assert str(setup) in message and "items[2].type" in message, message
+    assert "'milk'" in message and "15.0 x 12.0 cm" in message and "9.2 cm" in message
+
+
+def test_the_hollow_bowl_is_taken_out_of_its_drawer_by_its_rim_and_carried(
+        tmp_path: Path) -> None:
+    path = tmp_path / "c1.jsonl"
+    with TrialRunner("c1", backend="kinematic") as runner:
+        result = runner.run("opm", seed=0, trace=path)
+    assert result.success, result.failures
+    assert result.items["bowl"]["ok"]
+    trace = read_trace(path)
+    checker = checker_for(trace)
+    bowl = checker.items["bowl"]
+    radius = max(bowl.extents[:2]) / 2
+    held = [s for s in trace.states if "bowl" in s["held"]]
+    assert len(held) > 50
+    for state in held[:: max(1, len(held) // 40)]:
+        arm = state["held"]["bowl"]
+        tool = checker.robot_frames(state)[f"{arm[0]}_gripper_tool_frame"]
+        x, y, z = state["objects"]["bowl"][:3]  # (its bottom's centre)
+        across = math.dist(tool[:2, 3], (x, y))
+        # the tool (between the fingertips) is at the wall, near the top: on the rim
+        assert radius - 0.02 < across < radius + 0.01, across
+        assert 0.01 < tool[2, 3] - z < bowl.extents[2], tool[2, 3] - z
+    # and nothing of it was a magnet, a spill or a jump
+    found = physics_findings(trace, checker)
+    assert found == [], [f.describe() for f in found]
+
+
+def _straight_tilt(check, a: np.ndarray, b: np.ndarray) -> float:
+    return max((tilt for s in np.linspace(0, 1, 41) for _, tilt in check.tilts(a + s * (b - a))),
+               default=0.0)
+
+
+def test_an_upright_item_stays_upright_where_the_straight_joint_path_would_tip_it(
+        tmp_path: Path) -> None:
+    setup = load_setup("v1")
+    with load_backend("kinematic", setup) as backend, simulated_robot(backend) as ctx:
+        trace = ctx.open_trace(tmp_path / "tip.jsonl", "v1", "set-table", "test", 0,
+                               "kinematic")  # (picking it up and parking keep it upright too)
+        ParkArmsAction().perform(ctx)
+        MoveTorsoAction(0.25).perform(ctx)
+        position, orientation = ctx.scene.object_pose("milk")
+        location = CostmapLocation(position, grasps_of(ctx, "milk", ["front"]), "milk",
+                                   orientation=orientation)
+        reach = next(iter(location.ground(ctx)))
+        NavigateAction(reach.base).perform(ctx)
+        PickUpAction("milk", reach=reach).perform(ctx)
+        (arm,) = ctx.holding
+        ik = arm_ik(arm)
+        names = ik.joint_names
+        now = ctx.scene.joint_positions(names)
+        start = np.array([now[n] for n in names])
+        tool = ik.forward(now)
+        aside = 0.15 if arm == "left" else -0.15
+        target = pin.SE3(tool.rotation, tool.translation + np.array([0.05, aside, 0.05]))
+        check = ctx.collisions.check(names)
+        rng = np.random.default_rng(1)
+        goal = None
+        for _ in range(50):  # an arm configuration for that tool pose the straight joint
+            solution = ik.solve(target, rng, ik.from_q(ik.random_q(rng)), restarts=0,
+                                fixed_torso_m=now[names[0]])
+            if solution is None:
+                continue
+            q = ctx.limits.unwrap_goal(names, start,  # (as the motion will turn them)
+                                       np.array([solution.joints[n] for n in names]))
+            if check.is_free(q) and _straight_tilt(check, start, q) > 45:
+                goal = solution.joints  # path to which would tip the milk over
+                break
+        assert goal is not None
+        t0 = ctx.drive_s + ctx.arm_s  # (the robot's clock before the motion)
+        MoveArmJointsMotion(dict(goal)).perform(ctx)
+        trace.close()
+        reached = ik.forward(ctx.scene.joint_positions(names))
+        assert np.linalg.norm(reached.translation - target.translation) < 0.005
+    states = read_trace(tmp_path / "tip.jsonl").states
+    assert len([s for s in states if s["t"] > t0]) > 50  # (the motion itself)
+    for state in states:  # every executed state, read back from the trace
+        qx, qy, qz, qw = state["objects"]["milk"][3:]
+        up = 1 - 2 * (qx * qx + qy * qy)  # the milk's z axis, upwards component
+        assert math.degrees(math.acos(max(-1.0, min(1.0, up)))) <= 15.0 + 1e-6, state["t"]
+
+
+@pytest.mark.parametrize("name", ["cup", "milk"])
+def test_fingers_close_to_the_items_width_not_through_it(name: str) -> None:
+    setup = load_setup("v1")
+    with load_backend("kinematic", setup) as backend, simulated_robot(backend) as ctx:
+        ParkArmsAction().perform(ctx)
+        MoveTorsoAction(0.25).perform(ctx)
+        position, orientation = ctx.scene.object_pose(name)
+        location = CostmapLocation(position, grasps_of(ctx, name), name,
+                                   orientation=orientation)
+        reach = next(iter(location.ground(ctx)))
+        NavigateAction(reach.base).perform(ctx)
+        PickUpAction(name, reach=reach).perform(ctx)
+        (arm,) = ctx.holding
+        finger = ctx.scene.joint_positions([f"{arm[0]}_gripper_l_finger_joint"])
+        angle = next(iter(finger.values()))
+        gap = gripper_geometry().gap_at(angle)
+        # the fingertips stand the item's width apart (squeezed by at most 2 mm)
+        assert reach.grasp.width_m - 0.002 <= gap <= reach.grasp.width_m + 0.001, gap

@@ -1,0 +1,117 @@
+"""`replay --check`'s physics: a trace of an honest trial passes, and each way a trace can
+be physically impossible (fingers through what they hold, a spilled cup, a base that
+jumps, an item put down turned) is found, named and located, from the trace alone."""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+
+import pytest
+
+from cramlite.trace import read_trace
+from cramlite.trace.physics import physics_findings
+from cramlite.trial import TrialRunner
+from tests.conftest import run_cli
+
+
+@pytest.fixture(scope="module")
+def trace(tmp_path_factory):
+    path = tmp_path_factory.mktemp("physics") / "v1.jsonl"
+    with TrialRunner("v1", backend="kinematic") as runner:
+        result = runner.run("baseline", seed=0, trace=path)
+    assert result.success, result.failures
+    return read_trace(path)
+
+
+def _rotated(quat, axis: str, degrees: float) -> list[float]:
+    half = math.radians(degrees) / 2
+    turn = [0.0, 0.0, 0.0, math.cos(half)]
+    turn["xyz".index(axis)] = math.sin(half)
+    (x1, y1, z1, w1), (x2, y2, z2, w2) = turn, quat  # (turn * quat, x y z w)
+    return [w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2, w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2, w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2]
+
+
+def _held_states(trace, name: str) -> list[int]:
+    return [i for i, s in enumerate(trace.states) if name in s["held"]]
+
+
+def test_an_honest_trial_has_no_findings_and_holds_with_fingers_at_contact(trace) -> None:
+    assert physics_findings(trace) == []
+    # the fingers stop where they touch: holding the cup (8 cm across) they stand open
+    joints = trace.header["joints"]
+    held = _held_states(trace, "cup")
+    assert held
+    arm = trace.states[held[0]]["held"]["cup"]
+    finger = joints.index(f"{arm[0]}_gripper_l_finger_joint")
+    angles = {round(trace.states[i]["q"][finger], 3) for i in held}
+    assert min(angles) > 0.3, angles  # (closed would be 0; 9.2 cm open is 0.548)
+
+
+def test_fingers_closed_through_the_held_item_are_found(trace) -> None:
+    bad = copy.deepcopy(trace)
+    joints = bad.header["joints"]
+    for state in bad.states:
+        for arm in state["held"].values():
+            for name in joints:
+                if name.startswith(f"{arm[0]}_gripper_") and "finger" in name:
+                    state["q"][joints.index(name)] = 0.0
+    found = physics_findings(bad)
+    grips = [f for f in found if f.kind == "grip"]
+    assert grips, found
+    assert {f.what.split(" inside ")[1].strip("'") for f in grips} >= {"cup", "milk"}
+    assert all(f.value > 2 for f in grips)
+
+
+def test_a_carried_cup_tipped_over_is_found_with_its_time_and_line(trace) -> None:
+    bad = copy.deepcopy(trace)
+    held = _held_states(bad, "cup")
+    i = held[len(held) // 2]
+    pose = bad.states[i]["objects"]["cup"]
+    pose[3:] = _rotated(pose[3:], "x", 120)
+    found = physics_findings(bad)
+    assert [(f.kind, f.what, f.line) for f in found] == [("tilt", "cup", i + 2)]
+    assert found[0].value == pytest.approx(120, abs=1) and found[0].limit == 15
+    assert found[0].t == bad.states[i]["t"]
+
+
+def test_a_jump_of_the_base_is_found(trace) -> None:
+    bad = copy.deepcopy(trace)
+    moving = [i for i in range(1, len(bad.states) - 1)
+              if bad.states[i]["base"] != bad.states[i - 1]["base"]]
+    i = moving[len(moving) // 2]
+    bad.states[i]["base"][0] += 0.05  # 5 cm aside in one step of a drive
+    found = physics_findings(bad)
+    assert found and {f.kind for f in found} == {"base acceleration"}
+    assert any(abs(f.line - (i + 2)) <= 1 for f in found)
+
+
+def test_an_item_put_down_turned_is_found_up_to_its_symmetry(trace) -> None:
+    for name, degrees, expected in (("breakfast-cereal", 90, True),
+                                    ("breakfast-cereal", 180, False),  # (a box)
+                                    ("milk", 90, False), ("milk", 45, True),  # (square)
+                                    ("cup", 70, False)):  # (round)
+        bad = copy.deepcopy(trace)
+        pose = bad.states[-1]["objects"][name]
+        pose[3:] = _rotated(pose[3:], "z", degrees)
+        found = [f for f in physics_findings(bad) if f.kind == "yaw"]
+        assert bool(found) == expected, (name, degrees, found)
+        if expected:
+            assert found[0].what == f"{name} at its target"
+            assert found[0].value == pytest.approx(degrees if degrees < 90 else 90, abs=1)
+
+
+def test_replay_check_prints_physics_findings_and_exits_1(trace, tmp_path) -> None:
+    bad = copy.deepcopy(trace)
+    i = _held_states(bad, "milk")[5]
+    pose = bad.states[i]["objects"]["milk"]
+    pose[3:] = _rotated(pose[3:], "y", 165)
+    path = tmp_path / "tipped.jsonl"
+    path.write_text("\n".join(json.dumps(r) for r in [bad.header, *bad.states]) + "\n")
+    done = run_cli("replay", str(path), "--check")
+    assert done.returncode == 1, done.stderr
+    assert "not physical: tilt: milk: 165 deg (at most 15 deg)" in done.stdout
+    assert f"line {i + 2}" in done.stdout
+    assert "Traceback" not in done.stderr
