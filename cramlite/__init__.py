@@ -26,6 +26,8 @@ _EXPORTS = {
     "MoveTorsoAction": "cramlite.designators", "TransportAction": "cramlite.designators",
     "PlanFailure": "cramlite.designators", "ProcessModules": "cramlite.designators",
     "Sequential": "cramlite.designators", "TryInOrder": "cramlite.designators",
+    "OpenAction": "cramlite.designators.storage", "CloseAction": "cramlite.designators.storage",
+    "PlanReport": "cramlite.plans",
     # strategies
     "Strategy": "cramlite.strategies", "Candidate": "cramlite.strategies",
     "make_strategy": "cramlite.strategies", "available_strategies": "cramlite.strategies",

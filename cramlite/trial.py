@@ -19,11 +19,12 @@ from typing import Any
 import numpy as np
 
 from cramlite.backends import Backend, default_backend, load_backend
-from cramlite.designators import ExecutionOptions, RobotContext
+from cramlite.designators import ExecutionOptions, PlanFailure, RobotContext
 from cramlite.designators.tasks import time_in
 from cramlite.errors import SetupError
 from cramlite.plan_names import PLAN_NAMES  # noqa: F401  (re-exported)
-from cramlite.plans import PLANS
+from cramlite.plan_registry import is_builtin, plan_function
+from cramlite.plans import PlanReport
 from cramlite.scene.scene import PlanningScene
 from cramlite.scene.transforms import quat_yaw, yaw_quat
 from cramlite.scene.validate import check_setup
@@ -99,9 +100,8 @@ class TrialRunner:
             params: dict[str, float] | None = None, dims: str = "xy",
             order: list[str] | None = None, trace: str | Path | None = None) -> TrialResult:
         """One trial; `order` replaces the setup's baseline order (for `baseline`);
-        `trace`: write every executed state to this file (format cramlite-trace/1)."""
-        if plan not in PLANS:
-            raise ValueError(f"unknown plan {plan!r}; expected one of {', '.join(PLANS)}")
+        `trace`: write every executed state to this file (format cramlite-trace/2)."""
+        plan_fn = plan_function(plan)  # (UserInputError naming --plan if there is none)
         self.backend.reset(self._targets() if plan == "clear-table" else None)
         self.scene.reset()
         chooser = make_strategy(strategy, params=params, dims=dims,
@@ -115,14 +115,21 @@ class TrialRunner:
                            self.backend.name)
         try:
             start = time.perf_counter()
-            report = PLANS[plan](ctx, self.setup, chooser)
+            try:
+                report = plan_fn(ctx, self.setup, chooser)
+            except PlanFailure as exc:  # (a user's plan may let one escape)
+                report = PlanReport(failures=[exc], success=False)
             wall_s = time.perf_counter() - start
         finally:
             if ctx.trace is not None:
                 ctx.trace.close()
+        report = _as_report(report, plan)
         items, success = self._check(plan)
         actions = ctx.tasks.as_list()
-        success = success and not report.failures
+        if is_builtin(plan):
+            success = success and not report.failures
+        else:  # a user's plan says what success is (the items' places are reported)
+            success = report.success if report.success is not None else not report.failures
         return TrialResult(
             setup=self.setup.name, plan=plan, strategy=strategy, seed=seed, success=success,
             order=report.order, failures=[f.as_dict() for f in report.failures],
@@ -191,6 +198,16 @@ class TrialRunner:
         # every drawer and door is closed again
         success &= all(abs(v) < 1e-3 for v in self.modules.world_joint_positions().values())
         return items, success
+
+
+def _as_report(value: Any, plan: str) -> PlanReport:
+    """A plan's return value as a PlanReport (None: nothing to report)."""
+    if value is None:
+        return PlanReport()
+    if isinstance(value, PlanReport):
+        return value
+    raise TypeError(f"plan {plan!r} returned {type(value).__name__}; expected a PlanReport "
+                    "(from cramlite import PlanReport) or None")
 
 
 def run_trial(setup: Setup | str, strategy: str = "baseline", plan: str = "set-table",

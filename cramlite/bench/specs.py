@@ -54,11 +54,16 @@ class TrialSpec:
     trace: str = ""
     #: What executes the trial (see cramlite.backends).
     backend: str = "pybullet"
+    #: The hash of the code the names stand for: a plan file's, a learned model file's.
+    code_hash: str = ""
+    #: The folder the bench ran in: a plan or strategy file named relative to it loads
+    #: from there in any worker (see `cramlite.plugins.absolute_reference`).
+    cwd: str = ""
 
     @property
     def key(self) -> tuple[str, ...]:
         """Identity of a trial in a results file (used to resume)."""
-        return (self.setup, self.setup_hash, self.plan, self.strategy,
+        return (self.setup, self.setup_hash, self.plan, self.strategy, self.code_hash,
                 " ".join(self.given_order), self.backend, str(self.trial),
                 str(self.batch_seed))
 
@@ -88,6 +93,14 @@ class BatchPlan:
     trace_dir: str = ""
     #: What executes the trials: each trial runs on every one of them.
     backends: Sequence[str] = ("pybullet",)
+    #: Strategy (or FIXED_ORDER) -> the hash of the code its trials run (see `code_hash`).
+    code_hashes: dict[str, str] | None = None
+
+    #: The folder relative names of plan and strategy files are resolved against.
+    cwd: str = ""
+
+    def code_hash(self, strategy: str) -> str:
+        return (self.code_hashes or {}).get(strategy, "")
 
     def _trace(self, setup: str, strategy: str, trial: int, backend: str) -> str:
         if not self.trace_dir:
@@ -109,7 +122,8 @@ class BatchPlan:
                     for backend in self.backends:
                         yield TrialSpec(name, entry.path, strategy, trial, seed,
                                         self.batch_seed, self.plan, (), entry.content_hash,
-                                        self._trace(name, strategy, trial, backend), backend)
+                                        self._trace(name, strategy, trial, backend), backend,
+                                        self.code_hash(strategy), self.cwd)
             if self.all_orders:
                 for index, order in enumerate(itertools.permutations(entry.items)):
                     for backend in self.backends:
@@ -118,13 +132,14 @@ class BatchPlan:
                                         self.batch_seed, self.plan, tuple(order),
                                         entry.content_hash,
                                         self._trace(name, FIXED_ORDER, index, backend),
-                                        backend)
+                                        backend, self.code_hash(FIXED_ORDER), self.cwd)
 
     def contains(self, key: Sequence[str]) -> bool:
         """Whether a results row's key (see `TrialSpec.key`) is one of this batch's trials."""
-        setup, setup_hash, plan, strategy, given, backend, trial, batch_seed = key
+        setup, setup_hash, plan, strategy, code, given, backend, trial, batch_seed = key
         entry = self.setups.get(setup)
         if entry is None or entry.content_hash != setup_hash or plan != self.plan \
+                or code != self.code_hash(strategy) \
                 or batch_seed != str(self.batch_seed) or not trial.isdigit() \
                 or backend not in self.backends:
             return False

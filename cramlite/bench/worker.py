@@ -69,6 +69,7 @@ def run_spec(spec: TrialSpec, lock_timeout_s: float = -1) -> dict[str, Any]:
 
 
 def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
+    from cramlite.plugins import absolute_reference, trial_code_hash
     from cramlite.trial import TrialRunner
 
     start = time.perf_counter()
@@ -86,7 +87,17 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
                 return row
             _RUNNERS[cache_key] = runner
         strategy = "baseline" if spec.strategy == FIXED_ORDER else spec.strategy
-        result = runner.run(strategy, spec.plan, spec.seed,
+        plan = spec.plan
+        if spec.cwd:  # (files named relative to where the bench runs, wherever this runs)
+            strategy = absolute_reference(strategy, spec.cwd)
+            plan = absolute_reference(plan, spec.cwd)
+        if spec.code_hash and trial_code_hash(plan, strategy) != spec.code_hash:
+            row.update(success=False, error_type="CodeChanged",
+                       error=f"the plan or strategy file changed since the batch started "
+                             f"(hash {trial_code_hash(plan, strategy) or 'none'}, expected "
+                             f"{spec.code_hash})")
+            return row
+        result = runner.run(strategy, plan, spec.seed,
                             order=list(spec.given_order) or None, trace=spec.trace or None)
     except Exception as exc:  # recorded, the batch goes on
         row.update(success=False, error_type=type(exc).__name__,
@@ -108,7 +119,8 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
 
 def base_row(spec: TrialSpec) -> dict[str, Any]:
     return {"setup": spec.setup, "setup_hash": spec.setup_hash, "plan": spec.plan,
-            "strategy": spec.strategy, "given_order": " ".join(spec.given_order),
+            "strategy": spec.strategy, "code_hash": spec.code_hash,
+            "given_order": " ".join(spec.given_order),
             "backend": spec.backend,
             "trial": spec.trial, "seed": spec.seed, "batch_seed": spec.batch_seed,
             "success": False, "order": "", "failures": "[]", "failure_types": "",

@@ -17,7 +17,7 @@ from cramlite.cli.common import (
     positive_int,
 )
 from cramlite.errors import UserInputError
-from cramlite.plan_names import PLAN_NAMES
+from cramlite.plan_names import PLAN_HELP
 
 EXECUTORS = ("local", "dask")  # cramlite.bench.execute.EXECUTORS (tested)
 DEFAULT_TRIAL_TIMEOUT_S = 300.0  # cramlite.bench.execute.DEFAULT_TRIAL_TIMEOUT_S (tested)
@@ -140,7 +140,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
         except ImportError:
             raise UserInputError("the dask executor needs Dask: pip install 'cramlite[dask]'",
                                  field="--executor") from None
+    from cramlite.plan_registry import plan_function
+
     strategies = _strategies(args.strategies)
+    plan_function(args.plan)  # (a plan that cannot load: one line, exit 2, before any trial)
     args.backends = _backends(args)
     workers = _workers(args)
     setups = _setups(args.setups)
@@ -187,10 +190,15 @@ def _run(args, strategies, setups, workers, out) -> int:
         store.check_compatible({n: s.content_hash for n, s in setups.items()})
     except StoreMismatch as exc:
         raise UserInputError(str(exc), field="--out") from None
+    from cramlite.bench.specs import FIXED_ORDER
+    from cramlite.plugins import trial_code_hash
+
+    code = {s: trial_code_hash(args.plan, s) for s in [*strategies, FIXED_ORDER]}
     plan = BatchPlan({n: SetupEntry(str(s.source), s.content_hash, tuple(s.baseline_order))
                       for n, s in setups.items()}, strategies, args.trials, args.seed,
                      args.plan, args.all_orders,
-                     str(out / "traces") if args.traces else "", tuple(args.backends))
+                     str(out / "traces") if args.traces else "", tuple(args.backends), code,
+                     os.getcwd())
     done = {key for key in store.done_keys() if plan.contains(key)}
     total = plan.total()
     store.write_metadata({k: v for k, v in vars(args).items() if k != "func"}, args.executor)
@@ -297,8 +305,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                             f"trials (n! per setup; at most {MAX_ALL_ORDERS_ITEMS} items)")
     bench.add_argument("--random-setups", type=positive_int, default=None, metavar="N",
                        help="add N random setups (saved under OUT/setups)")
-    bench.add_argument("--plan", default="set-table", choices=PLAN_NAMES,
-                       help="which plan (default set-table)")
+    bench.add_argument("--plan", default="set-table", help=PLAN_HELP)
     bench.add_argument("--backend", help=BACKEND_HELP)
     bench.add_argument("--backends", dest="backends_list", metavar="A,B",
                        help="run every trial on each of these backends (the report puts "

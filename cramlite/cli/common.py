@@ -23,6 +23,7 @@ EXIT_BROKEN_PIPE = 141
 COMMANDS: dict[str, tuple[str, str]] = {
     "show": ("cramlite.cli.trials", "draw a setup headless into a PNG"),
     "run": ("cramlite.cli.trials", "run one trial of a plan in a setup (headless)"),
+    "plans": ("cramlite.cli.trials", "list the plans by name (built-in and plugins)"),
     "strategies": ("cramlite.cli.ordering", "list the ordering strategies by name"),
     "order": ("cramlite.cli.ordering",
               "answer JSON ordering requests (the OPM service without ROS)"),

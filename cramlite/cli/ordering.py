@@ -88,7 +88,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Lists the registered strategies: the built-in ones and those that "
                     "installed packages register under the entry-point group "
                     "cramlite.strategies. Commands that take --strategy also accept "
-                    "package.module:Class.")
+                    "package.module:Class and path/to/file.py:Class (a module in the "
+                    "current folder is found without PYTHONPATH).")
     strategies.set_defaults(func=cmd_strategies)
 
     order = sub.add_parser("order", help=command_help("order"), description=ORDER_DESCRIPTION,

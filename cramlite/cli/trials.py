@@ -18,7 +18,7 @@ from cramlite.cli.common import (
     writable_file,
 )
 from cramlite.errors import UserInputError
-from cramlite.plan_names import PLAN_NAMES
+from cramlite.plan_names import PLAN_HELP
 from cramlite.strategies.cost import DIMS
 
 #: Largest image side `show` renders (either renderer takes about a second per megapixel
@@ -80,12 +80,14 @@ def _show_top(setup, args: argparse.Namespace) -> int:
 def cmd_run(args: argparse.Namespace) -> int:
     import json
 
+    from cramlite.plan_registry import plan_function
     from cramlite.strategies import StrategyError
     from cramlite.trial import TrialRunner
     from cramlite.world import load_setup
 
     params = parse_params(args.params)
     strategy_checked(args.strategy, params=params, dims=args.dims)
+    plan_function(args.plan)  # (a plan that cannot load: one line, exit 2)
     setup = load_setup(args.setup)
     for path, option in ((args.trace, "--trace"), (args.image, "--image")):
         if path:
@@ -153,6 +155,16 @@ def _setup_help() -> str:
     return f"a shipped setup ({', '.join(shipped)}) or a path to a setup YAML file"
 
 
+def cmd_plans(args: argparse.Namespace) -> int:
+    from cramlite.plan_registry import available_plans
+
+    for name, summary in available_plans().items():
+        print(f"{name:16s} {summary}")
+    print(f"{'MODULE:FUNCTION':16s} a plan of yours: package.module:function or "
+          "path/to/file.py:function (see examples/)")
+    return EXIT_OK
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     setup_help = _setup_help()
     side = int_in_range(1, f"a whole number of pixels in [1, {MAX_IMAGE_SIDE}]", MAX_IMAGE_SIDE)
@@ -184,8 +196,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                      "driven and straight-line distances and the times. Exit "
                                      "code 0: success, 1: the plan failed, 2: bad input.")
     run.add_argument("setup", metavar="SETUP", help=setup_help)
-    run.add_argument("--plan", default="set-table", choices=PLAN_NAMES,
-                     help="which plan (default set-table)")
+    run.add_argument("--plan", default="set-table", help=PLAN_HELP)
     run.add_argument("--strategy", default="baseline",
                      help="ordering strategy: a name from `cramlite strategies` or "
                           "package.module:Class (default baseline)")
@@ -209,3 +220,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--trace", help="write every executed state to this JSON Lines file "
                                      "(cramlite-trace/2; `cramlite replay` shows it)")
     run.set_defaults(func=cmd_run)
+
+    plans = sub.add_parser(
+        "plans", help=command_help("plans"),
+        description="Lists the plans: the built-in ones and those that installed packages "
+                    "register under the entry-point group cramlite.plans. `run` and `bench` "
+                    "also take --plan package.module:function or path/to/file.py:function.")
+    plans.set_defaults(func=cmd_plans)

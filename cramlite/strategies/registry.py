@@ -7,16 +7,17 @@ Third-party packages register a `Strategy` subclass under the entry-point group
     my-order = "my_package.order:MyStrategy"
 
 Built-in and entry-point names are *registered*: anyone may name them, including an
-ordering request from another process. A `package.module:Class` path imports code, so
-only a command-line option may use it (`registered_only=True` refuses it).
+ordering request from another process. A `package.module:Class` or `path/to/file.py:Class` path
+imports code (see `cramlite.plugins`: also from the current folder), so only a
+command-line option may use it (`registered_only=True` refuses it).
 """
 
 from __future__ import annotations
 
-import importlib
 from typing import Any
 
 from cramlite.errors import UserInputError
+from cramlite.plugins import load_reference
 from cramlite.strategies.base import Strategy, StrategyError
 from cramlite.strategies.opm import NearestStrategy, OPMStrategy, OPMTwoStepStrategy
 from cramlite.strategies.optimal import OptimalStrategy
@@ -42,7 +43,13 @@ def available_strategies() -> dict[str, str]:
     out = {name: cls.summary for name, cls in BUILTIN.items()}
     out[f"{LEARNED_PREFIX}MODEL"] = "a model file written by `cramlite train` (RNN, NN, CPT)"
     for name, ep in plugin_entry_points().items():
-        out.setdefault(name, f"plugin {ep.value}")
+        try:
+            cls = ep.load()
+            summary = getattr(cls, "summary", "") or "(no summary)"
+            out.setdefault(name, f"{summary} (plugin {ep.value})")
+        except Exception as exc:  # a broken plugin is listed, with why
+            out.setdefault(name, f"plugin {ep.value}: cannot load: {type(exc).__name__}: "
+                                 f"{exc}")
     return out
 
 
@@ -67,8 +74,8 @@ def strategy_class(name: str, *, registered_only: bool = False) -> type[Strategy
         if name in plugins:
             cls = plugins[name].load()
         elif ":" in name and not registered_only:
-            module_name, _, attr = name.partition(":")
-            cls = getattr(importlib.import_module(module_name), attr)
+            # (a file path or a module, also from the current folder: see cramlite.plugins)
+            cls = load_reference(name, "strategy", "--strategy")
         elif ":" in name:
             raise StrategyError(f"{name!r} is not a registered strategy; a request may name "
                                 f"only {', '.join(available_strategies())} (a module:Class "
@@ -79,6 +86,8 @@ def strategy_class(name: str, *, registered_only: bool = False) -> type[Strategy
                                 f"{', '.join(available_strategies())} or package.module:Class")
     except StrategyError:
         raise
+    except UserInputError as exc:
+        raise StrategyError(exc.detail) from None
     except Exception as exc:  # ImportError, AttributeError, or anything a plugin's import raises
         raise StrategyError(f"cannot load strategy {name!r}: {type(exc).__name__}: {exc}") \
             from None

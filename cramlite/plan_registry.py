@@ -1,0 +1,97 @@
+"""Finding plans by name: built-ins, plugins (entry points), `module:function` and
+`path/to/file.py:function`.
+
+A plan is a function `plan(ctx, setup, strategy) -> PlanReport` written with designators
+(see `plans/set_table.py` and `examples/fetch_two.py`). Third-party packages register one
+under the entry-point group `cramlite.plans`, e.g. in their pyproject.toml:
+
+    [project.entry-points."cramlite.plans"]
+    fetch-two = "my_package.plans:fetch_two"
+
+The built-in plans' success is the trial's check of where the items ended (setting the
+table: at their targets; clearing up: back in their containers or on the counter); a
+user's plan says what success means by setting `PlanReport.success` (left None: success
+is "no failures").
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable
+from typing import Any
+
+from cramlite.errors import UserInputError
+from cramlite.plugins import file_hash, is_code_reference, load_reference
+
+ENTRY_POINT_GROUP = "cramlite.plans"
+BUILTIN_PLANS = ("set-table", "clear-table")
+
+Plan = Callable[..., Any]
+
+
+def _builtins() -> dict[str, Plan]:
+    from cramlite.plans import PLANS
+
+    return dict(PLANS)
+
+
+def plugin_entry_points() -> dict[str, Any]:
+    from importlib.metadata import entry_points
+
+    return {ep.name: ep for ep in entry_points(group=ENTRY_POINT_GROUP)}
+
+
+def summary_of(obj: Any) -> str:
+    """The first sentence of an object's docstring (or of its module's)."""
+    doc = inspect.getdoc(obj) or inspect.getdoc(inspect.getmodule(obj)) or ""
+    paragraph = " ".join(doc.strip().split("\n\n")[0].split())
+    if not paragraph:
+        return "(no docstring)"
+    end = paragraph.find(". ")
+    return paragraph if end < 0 else paragraph[:end + 1]
+
+
+def available_plans() -> dict[str, str]:
+    """Name -> one-line summary of every registered plan (built-in or plugin)."""
+    out = {name: summary_of(plan) for name, plan in _builtins().items()}
+    for name, ep in plugin_entry_points().items():
+        try:
+            out.setdefault(name, f"{summary_of(ep.load())} (plugin {ep.value})")
+        except Exception as exc:  # a broken plugin is listed, with why
+            out.setdefault(name, f"plugin {ep.value}: cannot load: {type(exc).__name__}: "
+                                 f"{exc}")
+    return out
+
+
+def plan_function(name: str, field: str = "--plan") -> Plan:
+    """The plan a name stands for; UserInputError naming `field` if there is none."""
+    builtins = _builtins()
+    if name in builtins:
+        return builtins[name]
+    plugins = plugin_entry_points()
+    if name in plugins:
+        try:
+            plan = plugins[name].load()
+        except Exception as exc:
+            raise UserInputError(f"cannot load plan {name!r} ({plugins[name].value}): "
+                                 f"{type(exc).__name__}: {exc}", field=field) from None
+    elif is_code_reference(name):
+        plan = load_reference(name, "plan", field)
+    else:
+        raise UserInputError(f"unknown plan {name!r}; expected one of "
+                             f"{', '.join(available_plans())}, package.module:function or "
+                             "path/to/file.py:function", field=field)
+    if not callable(plan):
+        raise UserInputError(f"plan {name!r} is not a function (ctx, setup, strategy) -> "
+                             "PlanReport", field=field)
+    return plan
+
+
+def is_builtin(name: str) -> bool:
+    return name in BUILTIN_PLANS
+
+
+def plan_hash(name: str) -> str:
+    """What identifies a plan's code beyond its name: its file's hash, for a plan given as
+    a file ("" otherwise)."""
+    return file_hash(name) if is_code_reference(name) else ""

@@ -1,0 +1,201 @@
+"""A user's plans and strategies as files, modules of the current folder and entry points,
+in `run`, `bench` (resumed, reported, on Dask) and `cramlite plans`; the examples run.
+(Kinematic backend: these are about loading and bookkeeping, on every Python.)"""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from cramlite.plugins import load_reference
+from tests.conftest import ROOT, run_cli
+
+EXAMPLES = ROOT / "examples"
+PLAN = f"{EXAMPLES / 'fetch_two.py'}:fetch_two"
+FARTHEST = f"{EXAMPLES / 'farthest_first.py'}:FarthestFirst"
+
+
+def _rows(folder: Path) -> list[dict[str, str]]:
+    with (folder / "trials.csv").open(newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def test_the_examples_run_a_plan_and_a_strategy_from_files() -> None:
+    done = run_cli("run", "c1", "--plan", PLAN, "--strategy", FARTHEST, "--backend",
+                   "kinematic", "--json")
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout)
+    assert result["success"] and len(result["order"]) == 2
+    # farthest first: from the start (-0.5, -1.8) the cup in the cupboard (y 1.6) is
+    # farther than anything on the counter
+    assert result["order"][0] == "cup"
+    names = [a["name"] for a in result["actions"]]
+    assert "OpenAction" in names and "CloseAction" in names  # (drawer_1, looked into)
+    setup = run_cli("run", str(EXAMPLES / "breakfast_for_one.yaml"), "--strategy", "opm",
+                    "--backend", "kinematic", "--json")
+    assert setup.returncode == 0, setup.stderr
+    assert json.loads(setup.stdout)["order"] == ["bowl", "milk", "cup"]
+
+
+def test_a_plan_that_fails_its_own_check_is_a_failed_trial(tmp_path: Path) -> None:
+    (tmp_path / "picky.py").write_text(
+        '"""Asks for nothing and says it failed."""\n'
+        "from cramlite import PlanReport\n\n"
+        "def picky(ctx, setup, strategy):\n"
+        "    return PlanReport(order=['nothing'], success=False)\n")
+    done = run_cli("run", "v1", "--plan", f"{tmp_path / 'picky.py'}:picky", "--backend",
+                   "kinematic", "--json")
+    assert done.returncode == 1, done.stderr
+    assert json.loads(done.stdout)["order"] == ["nothing"]
+
+
+def test_a_file_plan_does_not_shadow_the_standard_library_and_finds_its_siblings(
+        tmp_path: Path) -> None:
+    # (colorsys: a standard module nothing imported before the plan)
+    (tmp_path / "colorsys.py").write_text("raise RuntimeError('the standard colorsys was "
+                                          "shadowed')\n")
+    (tmp_path / "helpers.py").write_text("ITEMS = 1\n")
+    (tmp_path / "mine.py").write_text(
+        "import colorsys\nimport helpers\n\n"
+        "from cramlite import PlanReport\n\n"
+        "def mine(ctx, setup, strategy):\n"
+        "    colorsys.rgb_to_hsv(1, 0, 0)\n"
+        "    return PlanReport(order=[setup.items[0].name][:helpers.ITEMS])\n")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    done = run_cli("run", "v1", "--plan", "../mine.py:mine", "--backend", "kinematic",
+                   "--json", cwd=elsewhere)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["order"] == ["spoon"]
+
+
+def test_a_strategy_module_in_the_current_folder_loads_without_pythonpath(
+        tmp_path: Path) -> None:
+    shutil.copy(EXAMPLES / "farthest_first.py", tmp_path / "farthest.py")
+    done = run_cli("run", "v1", "--strategy", "farthest:FarthestFirst", "--backend",
+                   "kinematic", "--json", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["order"][0] == "breakfast-cereal"  # (on the island, far)
+
+
+@pytest.mark.parametrize(("plan", "expected"), [
+    ("nope", "unknown plan 'nope'; expected one of set-table, clear-table"),
+    ("./missing.py:plan", "no such file"),
+    (f"{EXAMPLES / 'fetch_two.py'}:fetch_three", "has no 'fetch_three'; it has"),
+    ("json:dumps_nothing", "has no 'dumps_nothing'"),
+])
+def test_a_plan_that_cannot_load_is_one_line_and_exit_2(plan: str, expected: str) -> None:
+    for command in (["run", "v1"], ["bench", "--setups", "v1", "--out", "/tmp/never"]):
+        done = run_cli(*command, "--plan", plan)
+        assert done.returncode == 2, done.stderr
+        assert expected in done.stderr and "--plan" in done.stderr, done.stderr
+        assert "Traceback" not in done.stderr
+    assert not Path("/tmp/never/trials.csv").exists()
+
+
+def test_a_plan_that_raises_on_import_is_named(tmp_path: Path) -> None:
+    (tmp_path / "broken.py").write_text("import no_such_module_anywhere\n")
+    done = run_cli("run", "v1", "--plan", f"{tmp_path / 'broken.py'}:plan")
+    assert done.returncode == 2
+    assert "cannot load plan" in done.stderr and "no_such_module_anywhere" in done.stderr
+
+
+def test_bench_runs_resumes_and_reports_a_plan_file_keyed_by_its_content(
+        tmp_path: Path) -> None:
+    plan_file = tmp_path / "fetch_two.py"
+    shutil.copy(EXAMPLES / "fetch_two.py", plan_file)
+    out = tmp_path / "out"
+    args = ("bench", "--plan", "./fetch_two.py:fetch_two", "--setups", "v1,c1", "--trials",
+            "2", "--strategies", "opm", "--backend", "kinematic", "--workers", "2",
+            "--out", str(out))
+    done = run_cli(*args, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-2000:]
+    rows = _rows(out)
+    assert len(rows) == 4 and all(r["success"] == "True" for r in rows)
+    assert {r["plan"] for r in rows} == {"./fetch_two.py:fetch_two"}
+    first_hash = rows[0]["code_hash"]
+    assert len(first_hash) == 16 and {r["code_hash"] for r in rows} == {first_hash}
+    page = (out / "report.html").read_text()
+    assert "fetch_two" in page and "Open</td>" in page  # (its task trees)
+    again = run_cli(*args, cwd=tmp_path)
+    assert again.returncode == 0 and len(_rows(out)) == 4  # resumed: nothing to run
+    assert "0 to run" in again.stderr + again.stdout or "already" in again.stderr
+    plan_file.write_text(plan_file.read_text().replace("COUNT = 2", "COUNT = 1"))
+    changed = run_cli(*args, cwd=tmp_path)  # other code: other trials
+    assert changed.returncode == 0, changed.stderr[-2000:]
+    rows = _rows(out)
+    assert len(rows) == 8
+    assert {len(r["order"].split()) for r in rows if r["code_hash"] != first_hash} == {1}
+
+
+def test_bench_on_dask_runs_a_plan_file(tmp_path: Path) -> None:
+    pytest.importorskip("distributed")
+    out = tmp_path / "out"
+    done = run_cli("bench", "--plan", PLAN, "--setups", "v1", "--trials", "1",
+                   "--strategies", "opm", "--backend", "kinematic", "--executor", "dask",
+                   "--workers", "1", "--no-plots", "--out", str(out))
+    assert done.returncode == 0, done.stderr[-2000:]
+    (row,) = _rows(out)
+    assert row["success"] == "True" and len(row["order"].split()) == 2
+
+
+@pytest.fixture
+def plugin_package(tmp_path: Path) -> dict[str, str]:
+    """The example plugin package, visible as installed (its dist-info on the path)."""
+    package = EXAMPLES / "cramlite_farthest"
+    dist = tmp_path / "cramlite_farthest-0.1.0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: cramlite-farthest\n"
+                                   "Version: 0.1.0\n")
+    import tomllib
+
+    entry_points = tomllib.loads((package / "pyproject.toml").read_text())["project"][
+        "entry-points"]
+    (dist / "entry_points.txt").write_text("".join(
+        f"[{group}]\n" + "".join(f"{k} = {v}\n" for k, v in eps.items())
+        for group, eps in entry_points.items()))
+    return {"PYTHONPATH": f"{tmp_path}:{package}"}
+
+
+def test_entry_point_plans_and_strategies_are_listed_and_run(plugin_package) -> None:
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, **plugin_package}
+
+    def cli(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "cramlite", *args], capture_output=True,
+                              text=True, env=env, cwd=ROOT, timeout=300)
+
+    plans = cli("plans")
+    assert plans.returncode == 0, plans.stderr
+    assert "set-table" in plans.stdout and "clear-table" in plans.stdout
+    assert "fetch-two" in plans.stdout and "Fetch the strategy's first two items" in \
+        plans.stdout
+    strategies = cli("strategies")
+    assert "farthest-first" in strategies.stdout and "farthest from the robot" in \
+        strategies.stdout
+    done = cli("run", "v1", "--plan", "fetch-two", "--strategy", "farthest-first",
+               "--backend", "kinematic", "--json")
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["order"] == ["breakfast-cereal", "bowl"]
+
+
+def test_the_plugin_package_holds_the_examples_as_they_are() -> None:
+    package = EXAMPLES / "cramlite_farthest" / "cramlite_farthest"
+    assert (package / "plan.py").read_text() == (EXAMPLES / "fetch_two.py").read_text()
+    assert (package / "strategy.py").read_text() == \
+        (EXAMPLES / "farthest_first.py").read_text()
+
+
+def test_load_reference_names_what_is_missing() -> None:
+    from cramlite.errors import UserInputError
+
+    assert load_reference("json:dumps", "plan", "--plan") is json.dumps
+    with pytest.raises(UserInputError, match="expected plan as package.module:name"):
+        load_reference("json", "plan", "--plan")
