@@ -26,6 +26,11 @@ _EXPORTS = {
     "MoveTorsoAction": "cramlite.designators", "TransportAction": "cramlite.designators",
     "PlanFailure": "cramlite.designators", "ProcessModules": "cramlite.designators",
     "Sequential": "cramlite.designators", "TryInOrder": "cramlite.designators",
+    "TryAll": "cramlite.designators", "Parallel": "cramlite.designators",
+    "Repeat": "cramlite.designators", "Code": "cramlite.designators",
+    "Retry": "cramlite.designators", "retry": "cramlite.designators",
+    "Monitor": "cramlite.designators", "MonitorFired": "cramlite.designators",
+    "RobotState": "cramlite.designators",
     "OpenAction": "cramlite.designators.storage", "CloseAction": "cramlite.designators.storage",
     "PlanReport": "cramlite.plans",
     # strategies

@@ -22,8 +22,19 @@ from cramlite.designators.failures import (
     PlacementFailed,
     PlanFailure,
 )
-from cramlite.designators.language import Sequential, TryInOrder
+from cramlite.designators.language import (
+    Code,
+    Monitor,
+    Parallel,
+    Repeat,
+    Retry,
+    Sequential,
+    TryAll,
+    TryInOrder,
+    retry,
+)
 from cramlite.designators.locations import CostmapLocation, PlacingLocation, ReachablePose
+from cramlite.designators.monitors import MonitorFired, RobotState
 from cramlite.designators.motions import (
     AttachMotion,
     DetachMotion,
@@ -44,5 +55,6 @@ __all__ = [
     "ObjectDesignatorDescription", "ObjectNotFound", "ObjectUnreachable", "ParkArmsAction",
     "PickUpAction", "PlaceAction", "PlacementFailed", "PlacingLocation", "PlanFailure",
     "ProcessModules", "ReachablePose", "RobotContext", "Sequential",
-    "TransportAction", "TryInOrder", "simulated_robot",
+    "TransportAction", "TryInOrder", "simulated_robot", "Code", "Monitor", "MonitorFired",
+    "Parallel", "Repeat", "Retry", "RobotState", "TryAll", "retry",
 ]

@@ -22,6 +22,7 @@ import pinocchio as pin
 from cramlite.designators.context import Holding, RobotContext, carried_map
 from cramlite.designators.failures import (
     GraspFailed,
+    MotionPlanningFailed,
     NavigationFailed,
     ObjectUnreachable,
     PlacementFailed,
@@ -46,7 +47,7 @@ from cramlite.designators.motions import (
     MoveTorsoMotion,
 )
 from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription, as_object
-from cramlite.designators.tasks import recorded
+from cramlite.designators.tasks import ActionDesignator
 from cramlite.motion.footprint import convex_hull_2d
 from cramlite.motion.ik import ARMS
 from cramlite.motion.trajectory import wrap_angle
@@ -64,15 +65,14 @@ FOOTPRINT_SPACING_M = 0.01
 
 
 @dataclass
-class ParkArmsAction:
+class ParkArmsAction(ActionDesignator):
     """Get the arms ready for driving, one after the other: an empty arm tucked (PyCRAM's
     park pose), an arm holding something in the carry pose (the object upright in front
     of the robot, above the counters)."""
 
     arm: str = "both"  #: "left", "right" or "both"
 
-    @recorded
-    def perform(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> None:
         for arm in ARMS if self.arm == "both" else (self.arm,):
             target = dict(PARK_JOINTS[arm])
             holding = ctx.holding.get(arm)
@@ -99,22 +99,26 @@ def _tool_at(ctx: RobotContext, arm: str, joints: dict[str, float],
 
 
 @dataclass
-class MoveTorsoAction:
+class MoveTorsoAction(ActionDesignator):
     height_m: float  #: torso lift in metres (0 to 0.31 on the PR2)
 
-    @recorded
-    def perform(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> None:
         MoveTorsoMotion(self.height_m).perform(ctx)
+
+    def validate(self, ctx: RobotContext, result: object = None) -> None:
+        torso = ctx.scene.joint_positions([TORSO_JOINT])[TORSO_JOINT]
+        if abs(torso - self.height_m) > 1e-3:
+            raise MotionPlanningFailed(f"the torso ended at {torso:.3f} m, not "
+                                       f"{self.height_m:.3f} m")
 
 
 @dataclass
-class NavigateAction:
+class NavigateAction(ActionDesignator):
     """Drive the base to a pose along a collision-free OMPL path."""
 
     target: BasePose  #: x, y, yaw in the world
 
-    @recorded
-    def perform(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> None:
         ctx.base_checker()  # up to date with what sticks out of the base
         start = ctx.scene.base
         path = ctx.base_planner.plan(start, self.target, ctx.rng)
@@ -124,6 +128,20 @@ class NavigateAction:
                                    f"{math.degrees(yaw):.0f} deg)")
         MoveMotion(path.waypoints).perform(ctx)
 
+    def validate(self, ctx: RobotContext, result: object = None) -> None:
+        x, y, yaw = ctx.scene.base  # (as the process modules report it)
+        off = math.dist((x, y), self.target[:2])
+        turn = abs(wrap_angle(yaw - self.target[2]))
+        if off > NAVIGATION_TOLERANCE_M or turn > NAVIGATION_TOLERANCE_RAD:
+            raise NavigationFailed(f"the base ended {off * 100:.1f} cm and "
+                                   f"{math.degrees(turn):.0f} deg from the goal")
+
+
+#: How close to its goal a navigation must end (the base follows its trajectory exactly
+#: in the shipped backends; a robot's localisation is worse).
+NAVIGATION_TOLERANCE_M = 0.05
+NAVIGATION_TOLERANCE_RAD = 0.1
+
 
 def _se3(pose: tuple[Vec3, tuple[float, float, float, float]]) -> pin.SE3:
     (x, y, z), (qx, qy, qz, qw) = pose
@@ -131,7 +149,7 @@ def _se3(pose: tuple[Vec3, tuple[float, float, float, float]]) -> pin.SE3:
 
 
 @dataclass
-class PickUpAction:
+class PickUpAction(ActionDesignator):
     """Grasp an object from where the robot stands, lift it and park the arm."""
 
     object: ObjectDesignator | ObjectDesignatorDescription | str  #: what to pick up
@@ -139,8 +157,7 @@ class PickUpAction:
     grasps: Sequence[str] | None = None  #: grasps to try (default by object shape)
     reach: ReachablePose | None = None  #: checked joints from a location designator
 
-    @recorded
-    def perform(self, ctx: RobotContext) -> str:
+    def execute(self, ctx: RobotContext) -> str:
         obj = as_object(self.object, ctx)
         if obj.name in held(ctx):
             raise GraspFailed("already held", obj=obj.name)
@@ -172,6 +189,11 @@ class PickUpAction:
             raise
         return reach.arm
 
+    def validate(self, ctx: RobotContext, result: object = None) -> None:
+        name = as_object(self.object, ctx).name
+        if name not in ctx.scene.held or result not in ctx.holding:
+            raise GraspFailed("not in the hand after the pick-up", obj=name)
+
     def _put_down_again(self, ctx: RobotContext, reach: ReachablePose, name: str) -> None:
         """After a failed lift: back to the grasp, let go, retreat (all checked paths)."""
         try:
@@ -200,7 +222,7 @@ class PickUpAction:
 
 
 @dataclass
-class PlaceAction:
+class PlaceAction(ActionDesignator):
     """Put a held object down at a position from where the robot stands: hover above the
     spot, lower it, let go, retreat, park the arm."""
 
@@ -210,8 +232,7 @@ class PlaceAction:
     #: The yaw it is to stand at (up to its symmetry); None: any.
     yaw: float | None = None
 
-    @recorded
-    def perform(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> None:
         obj = as_object(self.object, ctx)
         arm = next((a for a, h in ctx.holding.items() if h.obj == obj.name), None)
         if arm is None:
@@ -228,6 +249,11 @@ class PlaceAction:
         ctx.record_state()
         MoveArmJointsMotion(reach.post_joints, touch).perform(ctx)  # retreat
         ParkArmsAction(arm).perform(ctx)
+
+    def validate(self, ctx: RobotContext, result: object = None) -> None:
+        obj = as_object(self.object, ctx)
+        if obj.name in ctx.scene.held:
+            raise PlacementFailed("still in the hand after placing", obj=obj.name)
         (x, y, z), _ = obj.pose(ctx)
         off = math.dist((x, y), self.target[:2])
         if off > ctx.options.place_tolerance_m or \
@@ -246,7 +272,7 @@ class PlaceAction:
 
 
 @dataclass
-class TransportAction:
+class TransportAction(ActionDesignator):
     """Fetch an object and put it at a target (or on a surface): navigate, pick up,
     navigate, place; each step falls through to the next candidate on failure."""
 
@@ -259,8 +285,7 @@ class TransportAction:
     #: The yaw it is to stand at, at the target (up to its symmetry); None: any.
     target_yaw: float | None = None
 
-    @recorded
-    def perform(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> None:
         from cramlite.designators.storage import (
             CloseAction,
             OpenAction,
@@ -312,6 +337,11 @@ class TransportAction:
             to_close.append(destination)  # the item is in: close it
         for container in to_close:  # (what cannot be closed now, the plan closes at its end)
             _closed_now(ctx, CloseAction, container)
+
+    def validate(self, ctx: RobotContext, result: object = None) -> None:
+        name = as_object(self.object, ctx).name
+        if name in ctx.scene.held:
+            raise PlacementFailed("still in the hand after the transport", obj=name)
 
     def _fetch(self, ctx: RobotContext, obj: ObjectDesignator, target: Vec3 | None,
                closed=None, local: Vec3 | None = None,

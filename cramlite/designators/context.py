@@ -22,6 +22,7 @@ import numpy as np
 
 from cramlite.backends.base import Backend, ProcessModules
 from cramlite.designators.grasps import Grasp
+from cramlite.designators.monitors import Watch, first_firing
 from cramlite.designators.tasks import TaskTree
 from cramlite.motion.arm_planner import ArmMotionPlanner, ArmPlannerOptions
 from cramlite.motion.base_planner import BaseMotionPlanner, BasePlannerOptions
@@ -190,6 +191,8 @@ class RobotContext:
         self.arm_motions = 0
         self.trace_joints = [n for n in self.scene.robot.joints
                              if n.startswith(TRACE_JOINT_PREFIXES)]
+        #: The monitors watching every state of every motion now (see `Monitor`).
+        self.monitors: list[Watch] = []
 
     @property
     def time_s(self) -> float:
@@ -216,20 +219,73 @@ class RobotContext:
     # -- executing trajectories ---------------------------------------------------------
     def drive(self, trajectory: BaseTrajectory) -> None:
         t0 = self.time_s
-        self.modules.execute_base_trajectory(trajectory, self._observer(t0, trajectory.times))
+        fired = None
+        if self.monitors:
+            trajectory, fired = self._watched_base(trajectory)
+        if len(trajectory.poses):
+            self.modules.execute_base_trajectory(trajectory,
+                                                 self._observer(t0, trajectory.times))
         self.observe()
         self.base_path_m += trajectory.length_m
         self.driven_xy.append(np.asarray(trajectory.poses)[:, :2].copy())
         self.drive_s += trajectory.duration_s
+        if fired is not None:
+            raise fired
 
     def move_joints(self, trajectory: JointTrajectory) -> None:
         t0 = self.time_s
-        self.modules.execute_joint_trajectory(trajectory, self._observer(t0, trajectory.times))
+        fired = None
+        if self.monitors:
+            trajectory, fired = self._watched_joints(trajectory)
+        if len(trajectory.positions):
+            self.modules.execute_joint_trajectory(trajectory,
+                                                  self._observer(t0, trajectory.times))
         self.observe()
         self.arm_s += trajectory.duration_s
         self.footprint_stale = True  # an arm or the torso moved
         if trajectory.world:  # a drawer or door moved: the base planner's map changes
             self.refresh_maps()
+        if fired is not None:
+            raise fired
+
+    # -- monitors -----------------------------------------------------------------------
+    def _latched(self):
+        return next((w.fired for w in self.monitors if w.fired is not None), None)
+
+    def _watched_base(self, trajectory: BaseTrajectory):
+        """The trajectory as the monitors let it run (braked where one fires)."""
+        from cramlite.motion.braking import brake_base_trajectory
+
+        if (latched := self._latched()) is not None:
+            return BaseTrajectory(np.zeros((0, 3)), np.zeros(0)), latched
+        joints = self.scene.joint_positions()
+        poses = np.asarray(trajectory.poses, dtype=float)
+        k = first_firing(self.monitors, self.time_s, trajectory.times,
+                         lambda i: tuple(float(v) for v in poses[i]), lambda i: joints,
+                         tuple(self.scene.held))
+        if k is None:
+            return trajectory, None
+        return brake_base_trajectory(trajectory, k, self.options.base_limits), \
+            self._latched()
+
+    def _watched_joints(self, trajectory: JointTrajectory):
+        from cramlite.motion.braking import brake_joint_trajectory
+
+        if (latched := self._latched()) is not None:
+            return JointTrajectory(trajectory.names, np.zeros((0, len(trajectory.names))),
+                                   np.zeros(0)), latched
+        now = self.scene.joint_positions()
+        base = tuple(self.scene.base)
+        positions = np.asarray(trajectory.positions, dtype=float)
+
+        def joints_at(i: int) -> dict[str, float]:
+            return {**now, **dict(zip(trajectory.names, positions[i].tolist(), strict=True))}
+
+        k = first_firing(self.monitors, self.time_s, trajectory.times, lambda i: base,
+                         joints_at, tuple(self.scene.held))
+        if k is None:
+            return trajectory, None
+        return brake_joint_trajectory(trajectory, k, self.limits), self._latched()
 
     def refresh_maps(self) -> None:
         """Point the base planner at the map of the kitchen as it is believed to stand."""

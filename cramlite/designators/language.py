@@ -1,24 +1,63 @@
-"""Plan language: sequential composition and try-in-order of alternatives.
+"""The plan language (PyCRAM's, on cramlite's designators).
 
-Both take zero-argument callables or objects with `perform(ctx)`. `TryInOrder` tries
-alternatives until one succeeds; if all fail, the last failure escapes, carrying
-everything that was tried.
+Every construct takes steps: objects with `perform(ctx)` (actions, motions, other
+constructs) or callables taking the context. Each becomes a node of the task tree with
+its status and robot-time span.
+
+- `Sequential(steps)`: in order; the first failure stops it.
+- `TryInOrder(alternatives)`: until one succeeds; if all fail, the last failure escapes,
+  carrying everything that was tried.
+- `TryAll(steps)`: every step, whatever the others did; succeeds if one did (the results,
+  None for a failed step); if all fail, as `TryInOrder`.
+- `Parallel(steps)`: all of them; until combined motions exist (the parallel-motion
+  issue) they run one after another, in order, every one even when another failed; the
+  first failure escapes after all ran.
+- `Repeat(step, times)`: the step `times` times (a failure stops it).
+- `Code(function)`: a Python function of the context as a node of its own.
+- `Retry(step, attempts, on_failure)` (or `retry(step, n)`): up to `attempts` tries; before
+  each new try `on_failure(ctx, failure)` may recover (park the arms, put down what is
+  held), and the scene observes the world again, so the next try plans on what the
+  process modules report, never on the belief the failure left (a poisoned state).
+- `Monitor(condition, step)`: the condition is asked at every state of every motion
+  while the step runs (`cramlite.designators.monitors`); when it holds, the motion brakes
+  to rest within the limits and `MonitorFired` escapes.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+import contextlib
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
 from cramlite.designators.context import RobotContext
 from cramlite.designators.failures import PlanFailure
+from cramlite.designators.monitors import Condition, MonitorFired, Watch
 
 Step = Any  # an action/motion with .perform(ctx), or a callable taking ctx
 
 
 def _run(step: Step, ctx: RobotContext) -> Any:
     return step.perform(ctx) if hasattr(step, "perform") else step(ctx)
+
+
+@contextlib.contextmanager
+def _node(ctx: RobotContext | None, name: str) -> Iterator[None]:
+    """A node of the task tree (none without a context: a plain function call)."""
+    tasks = getattr(ctx, "tasks", None)
+    if tasks is None:
+        yield
+        return
+    with tasks.node(name):
+        yield
+
+
+def _all_failed(failures: list[tuple[str, PlanFailure]]) -> PlanFailure:
+    if not failures:
+        return PlanFailure("no alternatives to try")
+    tried = [f"{label}: {failure.kind}: {failure.reason}" for label, failure in failures]
+    last = failures[-1][1]
+    return type(last)(last.reason, obj=last.object, tried=tried)
 
 
 @dataclass
@@ -28,7 +67,8 @@ class Sequential:
     steps: Iterable[Step]
 
     def perform(self, ctx: RobotContext) -> list[Any]:
-        return [_run(step, ctx) for step in self.steps]
+        with _node(ctx, "Sequential"):
+            return [_run(step, ctx) for step in self.steps]
 
 
 @dataclass
@@ -39,14 +79,152 @@ class TryInOrder:
     describe: Callable[[Step], str] = repr
 
     def perform(self, ctx: RobotContext) -> Any:
-        tried: list[str] = []
-        last: PlanFailure | None = None
-        for alternative in self.alternatives:
+        failures: list[tuple[str, PlanFailure]] = []
+        with _node(ctx, "TryInOrder"):
+            for alternative in self.alternatives:
+                try:
+                    return _run(alternative, ctx)
+                except MonitorFired:
+                    raise  # (a monitor stops the alternatives too)
+                except PlanFailure as failure:
+                    failures.append((self.describe(alternative), failure))
+            raise _all_failed(failures)
+
+
+@dataclass
+class TryAll:
+    """Run every step; succeed if at least one did."""
+
+    steps: Iterable[Step]
+    describe: Callable[[Step], str] = repr
+
+    def perform(self, ctx: RobotContext) -> list[Any]:
+        results: list[Any] = []
+        failures: list[tuple[str, PlanFailure]] = []
+        with _node(ctx, "TryAll"):
+            for step in self.steps:
+                try:
+                    results.append(_run(step, ctx))
+                except MonitorFired:
+                    raise
+                except PlanFailure as failure:
+                    failures.append((self.describe(step), failure))
+                    results.append(None)
+            if results and len(failures) == len(results):
+                raise _all_failed(failures)
+        return results
+
+
+@dataclass
+class Parallel:
+    """All steps (one after another until combined motions exist); every one runs, and
+    the first failure escapes afterwards."""
+
+    steps: Iterable[Step]
+
+    def perform(self, ctx: RobotContext) -> list[Any]:
+        results: list[Any] = []
+        first: PlanFailure | None = None
+        with _node(ctx, "Parallel"):
+            for step in self.steps:
+                try:
+                    results.append(_run(step, ctx))
+                except MonitorFired:
+                    raise
+                except PlanFailure as failure:
+                    first = first or failure
+                    results.append(None)
+            if first is not None:
+                raise first
+        return results
+
+
+@dataclass
+class Repeat:
+    """Run a step `times` times; a failure stops it."""
+
+    step: Step
+    times: int
+
+    def perform(self, ctx: RobotContext) -> list[Any]:
+        if self.times < 0:
+            raise ValueError(f"Repeat: times must be >= 0, got {self.times}")
+        with _node(ctx, "Repeat"):
+            return [_run(self.step, ctx) for _ in range(self.times)]
+
+
+@dataclass
+class Code:
+    """A Python function of the context, as a node of the task tree."""
+
+    function: Callable[[RobotContext], Any]
+    name: str = ""
+
+    def perform(self, ctx: RobotContext) -> Any:
+        with _node(ctx, f"Code({self.name or getattr(self.function, '__name__', 'code')})"):
+            return self.function(ctx)
+
+
+Recovery = Callable[[RobotContext, PlanFailure], Any]
+
+
+@dataclass
+class Retry:
+    """Up to `attempts` tries of a step; between them `on_failure` recovers and the scene
+    observes the world again."""
+
+    step: Step
+    attempts: int = 2
+    on_failure: Recovery | None = None
+
+    def perform(self, ctx: RobotContext) -> Any:
+        if self.attempts < 1:
+            raise ValueError(f"Retry: attempts must be >= 1, got {self.attempts}")
+        failures: list[tuple[str, PlanFailure]] = []
+        with _node(ctx, "Retry"):
+            for attempt in range(1, self.attempts + 1):
+                try:
+                    return _run(self.step, ctx)
+                except MonitorFired:
+                    raise
+                except PlanFailure as failure:
+                    failures.append((f"attempt {attempt}", failure))
+                    if attempt == self.attempts:
+                        break
+                    if self.on_failure is not None:
+                        self.on_failure(ctx, failure)
+                    if ctx is not None:
+                        ctx.observe()  # (the next try plans on what the world reports)
+            raise _all_failed(failures)
+
+
+def retry(step: Step, attempts: int = 2, on_failure: Recovery | None = None) -> Retry:
+    """`Retry(step, attempts, on_failure)`."""
+    return Retry(step, attempts, on_failure)
+
+
+@dataclass
+class Monitor:
+    """Run a step while a condition is asked at every state of every motion; when it
+    holds, the motion brakes to rest and `MonitorFired` escapes."""
+
+    condition: Condition
+    step: Step
+    name: str = "monitor"
+
+    def perform(self, ctx: RobotContext) -> Any:
+        watch = Watch(self.condition, self.name)
+        with _node(ctx, "Monitor"):
+            ctx.monitors.append(watch)
             try:
-                return _run(alternative, ctx)
-            except PlanFailure as failure:
-                tried.append(f"{self.describe(alternative)}: {failure.kind}: {failure.reason}")
-                last = failure
-        if last is None:
-            raise PlanFailure("no alternatives to try")
-        raise type(last)(last.reason, obj=last.object, tried=tried)
+                try:
+                    result = _run(self.step, ctx)
+                except PlanFailure:
+                    if watch.fired is None:
+                        raise
+                    result = None
+            finally:
+                ctx.monitors.remove(watch)
+            if watch.fired is not None:
+                raise watch.fired
+            return result

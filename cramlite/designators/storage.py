@@ -34,7 +34,7 @@ from cramlite.designators.failures import (
 from cramlite.designators.grasps import Grasp, in_base_frame
 from cramlite.designators.locations import CostmapLocation, reaching_seed
 from cramlite.designators.motions import MoveArmJointsMotion, MoveGripperMotion, gripper_joints
-from cramlite.designators.tasks import recorded
+from cramlite.designators.tasks import ActionDesignator, recorded
 from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names
 from cramlite.motion.trajectory import time_along_path, wrap_angle
 from cramlite.process_cache import ProcessCache
@@ -458,27 +458,42 @@ def _let_go(ctx: RobotContext, container: Container, access: AccessPose) -> None
 
 
 @dataclass
-class OpenAction:
+class OpenAction(ActionDesignator):
     """Open a drawer or a cupboard door: grasp its handle and pull it open."""
 
     container: str  #: the container's name (see the world's containers)
     arms: Sequence[str] | None = None  #: arms to try (default: the free ones)
 
-    @recorded
-    def perform(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> None:
         _move_container(ctx, self.container, "open", self.arms)
+
+    def validate(self, ctx: RobotContext, result: object = None) -> None:
+        if not ctx.scene.is_open(_container(ctx, self.container)):
+            raise ContainerManipulationFailed("not open after opening it", obj=self.container)
 
 
 @dataclass
-class CloseAction:
+class CloseAction(ActionDesignator):
     """Close a drawer or a cupboard door: grasp its handle and push it shut."""
 
     container: str  #: the container's name
     arms: Sequence[str] | None = None  #: arms to try (default: the free ones)
 
-    @recorded
-    def perform(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> None:
         _move_container(ctx, self.container, "close", self.arms)
+
+    def validate(self, ctx: RobotContext, result: object = None) -> None:
+        container = _container(ctx, self.container)
+        if abs(ctx.scene.world_joint_positions()[container.joint]) > 1e-3:
+            raise ContainerManipulationFailed("not closed after closing it",
+                                              obj=self.container)
+
+
+def _container(ctx: RobotContext, name: str) -> Container:
+    if name not in ctx.scene.containers:
+        raise ContainerManipulationFailed(f"no container {name!r}; expected one of "
+                                          f"{', '.join(ctx.scene.containers)}", obj=name)
+    return ctx.scene.containers[name]
 
 
 def container_of(ctx: RobotContext, obj: str) -> Container | None:

@@ -101,6 +101,35 @@ def recorded(perform: Callable) -> Callable:
     return wrapper
 
 
+class ActionDesignator:
+    """The base of every action designator (a template method): `perform(ctx)` records
+    the action as a node of the task tree, runs `execute(ctx)` and then `validate(ctx,
+    result)`, the action's post-condition (raise a PlanFailure if it does not hold).
+    Subclasses implement `execute` (and `validate`), never `perform`: a post-condition
+    cannot be skipped (in PyCRAM nothing calls an action's `validate()`)."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "perform" in cls.__dict__:
+            raise TypeError(f"{cls.__name__} defines perform(); an action implements "
+                            "execute(ctx) and validate(ctx, result), and perform() runs both "
+                            "(so the post-condition always runs)")
+
+    def perform(self, ctx: Any) -> Any:
+        obj = object_name(getattr(self, "object", None) or getattr(self, "obj", None)
+                          or getattr(self, "container", None))
+        with ctx.tasks.node(type(self).__name__, obj):
+            result = self.execute(ctx)
+            self.validate(ctx, result)
+            return result
+
+    def execute(self, ctx: Any) -> Any:
+        raise NotImplementedError(f"{type(self).__name__} implements no execute(ctx)")
+
+    def validate(self, ctx: Any, result: Any = None) -> None:
+        """The action's post-condition (none by default)."""
+
+
 def actions_only(nodes: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """A task tree (as dictionaries) without its motion nodes: the actions, for reports."""
     return [{**node, "children": actions_only(node["children"])} for node in nodes
