@@ -99,11 +99,14 @@ def test_parallel_of_two_transports_runs_both_and_reports_a_failure_after_all(ro
     cup, milk = setup.item("cup"), setup.item("milk")
     ParkArmsAction().perform(robot)
     MoveTorsoAction(0.25).perform(robot)
-    Parallel([TransportAction("cup", target=cup.target.xyz, target_yaw=cup.target.yaw),
-              TransportAction("milk", target=milk.target.xyz,
-                              target_yaw=milk.target.yaw)]).perform(robot)
-    for spec in (cup, milk):
+    ended = Parallel([TransportAction("cup", target=cup.target.xyz,
+                                      target_yaw=cup.target.yaw),
+                      TransportAction("milk", target=milk.target.xyz,
+                                      target_yaw=milk.target.yaw)]).perform(robot)
+    for spec, where in zip((cup, milk), ended, strict=True):
         assert math.dist(robot.scene.object_pose(spec.name)[0][:2], spec.target.xyz[:2]) < 0.05
+        assert where == robot.scene.object_pose(spec.name)[0]  # (perform says where)
+    assert len(repr(robot)) < 300 and "'v1'" in repr(robot)  # (no path dump)
     node = _node(robot, "Parallel")
     assert [c["name"] for c in node["children"]] == ["TransportAction"] * 2
     ran = []

@@ -114,11 +114,11 @@ class MoveTorsoAction(ActionDesignator):
 
 @dataclass
 class NavigateAction(ActionDesignator):
-    """Drive the base to a pose along a collision-free OMPL path."""
+    """Drive the base to a pose along a collision-free OMPL path; returns where it ended."""
 
     target: BasePose  #: x, y, yaw in the world
 
-    def execute(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> BasePose:
         ctx.base_checker()  # up to date with what sticks out of the base
         start = ctx.scene.base
         path = ctx.base_planner.plan(start, self.target, ctx.rng)
@@ -127,6 +127,7 @@ class NavigateAction(ActionDesignator):
             raise NavigationFailed(f"no collision-free base path to ({x:.2f}, {y:.2f}, "
                                    f"{math.degrees(yaw):.0f} deg)")
         MoveMotion(path.waypoints).perform(ctx)
+        return tuple(ctx.scene.base)  # (where the base ended, as the modules report it)
 
     def validate(self, ctx: RobotContext, result: object = None) -> None:
         x, y, yaw = ctx.scene.base  # (as the process modules report it)
@@ -224,7 +225,7 @@ class PickUpAction(ActionDesignator):
 @dataclass
 class PlaceAction(ActionDesignator):
     """Put a held object down at a position from where the robot stands: hover above the
-    spot, lower it, let go, retreat, park the arm."""
+    spot, lower it, let go, retreat, park the arm; returns where it came to rest."""
 
     object: ObjectDesignator | ObjectDesignatorDescription | str  #: the held object
     target: Vec3  #: where the object's bottom centre goes
@@ -232,7 +233,7 @@ class PlaceAction(ActionDesignator):
     #: The yaw it is to stand at (up to its symmetry); None: any.
     yaw: float | None = None
 
-    def execute(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> Vec3:
         obj = as_object(self.object, ctx)
         arm = next((a for a, h in ctx.holding.items() if h.obj == obj.name), None)
         if arm is None:
@@ -249,6 +250,7 @@ class PlaceAction(ActionDesignator):
         ctx.record_state()
         MoveArmJointsMotion(reach.post_joints, touch).perform(ctx)  # retreat
         ParkArmsAction(arm).perform(ctx)
+        return obj.pose(ctx)[0]  # (where it came to rest)
 
     def validate(self, ctx: RobotContext, result: object = None) -> None:
         obj = as_object(self.object, ctx)
@@ -274,7 +276,8 @@ class PlaceAction(ActionDesignator):
 @dataclass
 class TransportAction(ActionDesignator):
     """Fetch an object and put it at a target (or on a surface): navigate, pick up,
-    navigate, place; each step falls through to the next candidate on failure."""
+    navigate, place; each step falls through to the next candidate on failure. Returns
+    where the object came to rest."""
 
     object: ObjectDesignator | ObjectDesignatorDescription | str  #: what to carry
     target: Vec3 | None = None  #: where its bottom centre goes (or give `surface`)
@@ -285,7 +288,7 @@ class TransportAction(ActionDesignator):
     #: The yaw it is to stand at, at the target (up to its symmetry); None: any.
     target_yaw: float | None = None
 
-    def execute(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> Vec3:
         from cramlite.designators.storage import (
             CloseAction,
             OpenAction,
@@ -337,6 +340,7 @@ class TransportAction(ActionDesignator):
             to_close.append(destination)  # the item is in: close it
         for container in to_close:  # (what cannot be closed now, the plan closes at its end)
             _closed_now(ctx, CloseAction, container)
+        return obj.pose(ctx)[0]  # (where it came to rest)
 
     def validate(self, ctx: RobotContext, result: object = None) -> None:
         name = as_object(self.object, ctx).name

@@ -194,6 +194,13 @@ class RobotContext:
         #: The monitors watching every state of every motion now (see `Monitor`).
         self.monitors: list[Watch] = []
 
+    def __repr__(self) -> str:  # (the dataclass's would print every driven path point)
+        x, y, yaw = self.scene.base
+        held = {arm: h.obj for arm, h in self.holding.items()}
+        return (f"RobotContext(setup={self.scene.setup.name!r}, base=({x:.2f}, {y:.2f}, "
+                f"{math.degrees(yaw):.0f} deg), holding={held}, robot_time={self.time_s:.1f} s, "
+                f"driven={self.base_path_m:.2f} m, modules={type(self.modules).__name__})")
+
     @property
     def time_s(self) -> float:
         """Robot time since the plan started: driving plus arm motion."""
