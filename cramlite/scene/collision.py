@@ -199,7 +199,9 @@ class SceneCollisions:
             if len(points):
                 local = (points - pp[:3, 3]) @ pp[:3, :3]
                 deepest = float(primitive_depth(local, prim).max())
-            # (and the primitive's points in the mesh: a thin wall may pass through it)
+            if float(np.min(prim.half)) > THIN_PRIMITIVE_M:
+                return deepest
+            # (a thin primitive, a wall, may pass through the mesh: its points inside)
             return max(deepest, _depth_in_mesh(self, prim, pp, mesh, pm))
         return _primitive_pair_depth(self, a, pa, b, pb)
 
@@ -731,6 +733,11 @@ def _mesh_depth(owner: SceneCollisions, a: Shape, pa: np.ndarray, b: Shape,
     """How deep two crossing meshes are inside each other: the largest distance from the
     other's surface of the surface points of one that lie inside the other."""
     return max(_depth_in_mesh(owner, a, pa, b, pb), _depth_in_mesh(owner, b, pb, a, pa))
+
+
+#: A primitive this thin (half its smallest side) may pass through a mesh with no point of
+#: the mesh deep inside it: its depth also counts its own points inside the mesh.
+THIN_PRIMITIVE_M = 0.01
 
 
 def _depth_in_mesh(owner: SceneCollisions, inner: Shape, pi: np.ndarray, outer: Shape,
