@@ -161,8 +161,9 @@ def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[
     lines.append("Driven path: length of the base paths actually executed. Straight-line: sum "
                  "over steps of the xy distances robot -> item -> where it was put. Robot time: "
                  "the robot's own time, from the plan's start to the end of its last motion "
-                 "(base trajectories at 1.0 m/s, 1 rad/s; arm, torso and gripper "
-                 "trajectories timed from the URDF's limits), deterministic for a seed; "
+                 "(base trajectories at up to 1 m/s and 1 rad/s, accelerating at 1 m/s^2 and "
+                 "1.5 rad/s^2; arm, torso and gripper trajectories timed from the URDF's "
+                 "limits), deterministic for a seed; "
                  "wall: the host's time to plan and execute it. open/close: the part of the "
                  "robot time spent opening and closing drawers and doors. Times and lengths "
                  "are of the successful trials (–: none succeeded).")
