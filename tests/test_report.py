@@ -103,6 +103,8 @@ def test_page_shows_every_setup_strategy_order_and_failure_offline(bench_dir: Pa
         if row["success"] != "True":
             assert "ObjectUnreachable" in plain and "milk" in plain
     assert plain.count("FAILED") >= 2
+    # failed trials: the banner says so (not the green "complete" one)
+    assert 'class="status failures"' in text and "Complete, with failures" in plain
     # one replay drawn (--max-replays 1), the others say why not
     gifs = [src for src in page.images if src.endswith(".gif")]
     assert len(gifs) == 1 and "replay not drawn" in plain
@@ -242,3 +244,24 @@ def test_labels_are_spread_and_points_project_onto_the_image() -> None:
     assert placed[3] == 3.0  # a label with room stays where its spot is
     u, v = camera(None, SHOW_CAMERA).project(np.array([SHOW_CAMERA["target"]]), 640, 480)[0]
     assert (u, v) == pytest.approx((320, 240), abs=0.5)  # the camera looks at its target
+
+
+def test_the_rerun_command_of_a_setup_file_runs_as_printed(tmp_path) -> None:
+    import re
+    import shlex
+
+    setup = tmp_path / "mine.yaml"
+    setup.write_text((ROOT / "worlds" / "setups" / "v1.yaml").read_text()
+                     .replace("name: v1", "name: my6"))
+    out = tmp_path / "out"
+    done = cli("bench", "--out", str(out), "--setups", str(setup), "--strategies", "opm",
+               "--trials", "1", "--backend", "kinematic", "--no-plots")
+    assert done.returncode == 0, done.stderr
+    text = html.unescape((out / "report.html").read_text())
+    (command,) = set(re.findall(r"Rerun it alone: <code>(.*?)</code>", text))
+    words = shlex.split(command)
+    assert words[:3] == ["cramlite", "run", str(setup)]  # its path, not its name (my6)
+    rerun = cli(*words[1:], "--json")
+    assert rerun.returncode == 0, rerun.stderr
+    (row,) = rows(out)
+    assert json.loads(rerun.stdout)["order"] == row["order"].split()

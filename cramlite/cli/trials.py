@@ -77,6 +77,21 @@ def _show_top(setup, args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _order(text: str | None, setup, strategy: str) -> list[str] | None:
+    """--order A,B,...: every item of the setup once, for the baseline strategy."""
+    if text is None:
+        return None
+    order = [name.strip() for name in text.split(",") if name.strip()]
+    names = [spec.name for spec in setup.items]
+    if strategy != "baseline":
+        raise UserInputError(f"--order is for --strategy baseline, got {strategy!r}",
+                             field="--order")
+    if sorted(order) != sorted(names):
+        raise UserInputError(f"expected each item of {setup.name} once ({', '.join(names)}), "
+                             f"got {', '.join(order) or 'nothing'}", field="--order")
+    return order
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     import json
 
@@ -89,6 +104,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     strategy_checked(args.strategy, params=params, dims=args.dims)
     plan_function(args.plan)  # (a plan that cannot load: one line, exit 2)
     setup = load_setup(args.setup)
+    order = _order(args.order, setup, args.strategy)
     for path, option in ((args.trace, "--trace"), (args.image, "--image")):
         if path:
             writable_file(path, option)
@@ -103,7 +119,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     with runner:
         try:
             result = runner.run(args.strategy, args.plan, args.seed, params=params,
-                                dims=args.dims, trace=args.trace)
+                                dims=args.dims, trace=args.trace, order=order)
         except StrategyError as exc:  # e.g. optimal with too many items, a broken plugin
             raise UserInputError(str(exc), field="--strategy") from None
         if args.image:
@@ -207,6 +223,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                      help="projection the strategy measures distance in (default xy)")
     run.add_argument("--seed", type=non_negative_int, default=0,
                      help="random seed of the trial (default 0)")
+    run.add_argument("--order", metavar="A,B,...",
+                     help="with --strategy baseline: fetch in this order instead of the "
+                          "setup's baseline_order (a bench's fixed-order trial, rerun)")
     run.add_argument("--keep-open", action="store_true",
                      help="leave the drawers and doors the robot opens open until the plan "
                           "ends (default: each is closed as soon as its item is out or in)")

@@ -12,6 +12,7 @@ from typing import Any
 from cramlite.bench.plots import BOX_LEGEND
 from cramlite.bench.specs import FIXED_ORDER
 from cramlite.bench.summary import MEASURES
+from cramlite.errors import UserInputError
 from cramlite.report.folder import BenchFolder
 from cramlite.report.trials import failure_text, ok, orders, steps, trial_id
 
@@ -31,6 +32,7 @@ th{background:#f0f0f0}td.n{text-align:right;font-variant-numeric:tabular-nums}td
 tr.fail td{background:#fdecea}
 .status{padding:8px 12px;border-radius:6px;margin:8px 0}
 .complete{background:#e8f5e9}.incomplete{background:#fff4e5}
+.failures{background:#fdecea;border:1px solid #e57373}
 .note{color:#555;font-size:13px}.bad{color:#b71c1c}
 .chip{display:inline-block;width:11px;height:11px;border-radius:2px;margin-right:5px;
 vertical-align:-1px}
@@ -119,6 +121,33 @@ def render_page(data: PageData) -> str:
     return "\n".join(p for p in parts if p)
 
 
+def rerun_command(row: dict[str, Any], setup: Any = None) -> str:
+    """The `cramlite run` command that reruns a trial alone: the setup by its shipped name
+    or its file's path, the plan, strategy, order, seed and backend as the bench had them."""
+    import shlex
+
+    from cramlite.world.setup import resolve_setup_path
+
+    reference = row["setup"]
+    if setup is not None:
+        try:
+            shipped = resolve_setup_path(setup.name).resolve() == setup.source.resolve()
+        except UserInputError:
+            shipped = False
+        reference = setup.name if shipped else str(setup.source)
+    strategy = row.get("strategy_name", row["strategy"])
+    words = ["cramlite", "run", reference]
+    if row.get("plan") and row["plan"] != "set-table":
+        words += ["--plan", row["plan"]]
+    words += ["--strategy", strategy if strategy != FIXED_ORDER else "baseline"]
+    if strategy == FIXED_ORDER and row.get("given_order"):
+        words += ["--order", ",".join(str(row["given_order"]).split())]
+    words += ["--seed", str(row.get("seed", 0))]
+    if row.get("backend"):
+        words += ["--backend", row["backend"]]
+    return shlex.join(words)
+
+
 def _status(data: PageData) -> str:
     folder = data.folder
     rows = folder.rows
@@ -135,6 +164,9 @@ def _status(data: PageData) -> str:
                 f"{folder.planned} trials of the last bench command are here ({e(counts)}); "
                 "it was interrupted. Run the same command again to finish, then "
                 "<code>cramlite report DIR</code>.</p>")
+    if failed:
+        return (f'<p class="status failures">Complete, with failures: {e(counts)} (see '
+                '<a href="#failures">Failures</a>).</p>')
     return f'<p class="status complete">Complete: {e(counts)}.</p>'
 
 
@@ -308,17 +340,14 @@ def _trial(data: PageData, row: dict[str, Any]) -> str:
     head = (f'<div class="trial{"" if good else " failed"}" id="trial-{e(tid)}"><h4>'
             f"{chip(colour)}{e(row['setup'])} · {e(row['strategy'])} · trial {e(row['trial'])}"
             f" — " + ("succeeded" if good else '<span class="bad">FAILED</span>') + "</h4>")
-    strategy = row.get("strategy_name", row["strategy"])
-    backend = f" --backend {e(row['backend'])}" if row.get("backend") else ""
+    rerun = rerun_command(row, data.folder.setups.get(row["setup"]))
     facts = (f"<p>Order: {order_html(row['order'])}<br><span class=note>seed "
              f"{e(row.get('seed', '–'))}; robot time {num(row.get('robot_time_s'))} s "
              f"(driving {num(row.get('drive_s'))} s, arm {num(row.get('arm_s'))} s; opening "
              f"and closing {num(row.get('open_close_s'))} s), computed in "
              f"{num(row.get('wall_s'))} s; driven path {num(row.get('base_path_m'))} m"
              f"{'; on ' + e(row['backend']) if row.get('backend') else ''}. Rerun it alone: "
-             f"<code>cramlite run {e(row['setup'])} --strategy "
-             f"{e(strategy if strategy != FIXED_ORDER else 'baseline')} "
-             f"--seed {e(row.get('seed', 0))}{backend}</code></span></p>")
+             f"<code>{e(rerun)}</code></span></p>")
     parts = [head, facts]
     if not good:
         lines = failure_text(row).split(" | ")
