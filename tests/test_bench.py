@@ -500,3 +500,22 @@ def test_summary_shows_a_dash_where_no_trial_succeeded() -> None:
         text = write_summary(Path(folder), summarise(rows, {}), [], [])
     line = next(x for x in text.splitlines() if x.startswith("| unreachable"))
     assert "nan" not in line and "| 0% | – / – |" in line
+
+
+def test_the_paired_tests_compare_with_the_reference_asked_for(tmp_path: Path) -> None:
+    out = tmp_path / "ref"
+    common = ("--setups", "v1,v2", "--trials", "2", "--backend", "kinematic", "--no-plots",
+              "--workers", "2")
+    done = bench(out, *common, "--strategies", "opm,nearest")  # no baseline: the first
+    assert done.returncode == 0, done.stderr[-1500:]
+    tests = json.loads((out / "tests.json").read_text())["wilcoxon"]
+    assert {(t["strategy"], t["reference"]) for t in tests} == {("nearest", "opm")}
+    asked = tmp_path / "asked"
+    done = bench(asked, *common, "--strategies", "opm,nearest", "--reference", "nearest")
+    assert done.returncode == 0, done.stderr[-1500:]
+    tests = json.loads((asked / "tests.json").read_text())["wilcoxon"]
+    assert {(t["strategy"], t["reference"]) for t in tests} == {("opm", "nearest")}
+    page = (asked / "report.html").read_text()
+    assert "against nearest" in page and "nearest mean" in page
+    wrong = bench(tmp_path / "wrong", *common, "--strategies", "opm", "--reference", "nope")
+    assert wrong.returncode == 2 and "--reference" in wrong.stderr

@@ -108,3 +108,12 @@ def test_outputs_that_cannot_be_written_are_refused_before_the_work(tmp_path, ar
 def test_compare_refuses_a_strategy_named_twice() -> None:
     result = run_cli("compare", "table-setting", "--strategies", "opm,nearest,opm")
     assert result.returncode == 2 and "--strategies: opm named twice" in result.stderr
+
+
+def test_evaluate_prints_its_summary_and_the_episodes_only_when_asked() -> None:
+    short = run_cli("evaluate", "table-setting")
+    assert short.returncode == 0, short.stderr
+    lines = short.stdout.strip().splitlines()
+    assert len(lines) <= 6 and lines[0].startswith("opm (xy, power")
+    full = run_cli("evaluate", "table-setting", "--verbose")
+    assert len(full.stdout.strip().splitlines()) >= 186 + 4

@@ -1,4 +1,5 @@
-"""Batch summary: per setup and strategy, and paired tests OPM vs baseline (scipy).
+"""Batch summary: per setup and strategy, and paired tests of each strategy against a
+reference (baseline by default; scipy).
 
 Columns: trials, success rate, robot time (the robot's own time: driving and arm motion,
 from the executed trajectories), mean/median wall time (the host's computing), driven
@@ -61,15 +62,27 @@ def summarise(rows: Sequence[dict[str, Any]], baseline_orders: dict[str, Sequenc
     return out
 
 
-def reference_tests(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The paired tests of every strategy against baseline (on each backend: a strategy
-    labelled `opm@kinematic` against `baseline@kinematic`); none without baseline."""
+def reference_strategy(rows: Sequence[dict[str, Any]], asked: str | None = None) -> str:
+    """The strategy the paired tests compare with: the one asked for (`bench --reference`),
+    else baseline if there are baseline trials, else the first strategy of the rows."""
+    names = list(dict.fromkeys(r["strategy"].split("@")[0] for r in rows
+                               if r["strategy"] != FIXED_ORDER))
+    if asked:
+        return asked
+    return "baseline" if "baseline" in names or not names else names[0]
+
+
+def reference_tests(rows: Sequence[dict[str, Any]], reference: str | None = None,
+                    ) -> list[dict[str, Any]]:
+    """The paired tests of every strategy against the reference (see `reference_strategy`;
+    on each backend: a strategy labelled `opm@kinematic` against `baseline@kinematic`)."""
+    reference = reference_strategy(rows, reference)
     labels = sorted({r["strategy"] for r in rows} - {FIXED_ORDER})
     out = []
-    for reference in (s for s in labels if s.split("@")[0] == "baseline"):
-        backend = reference.split("@")[1:]
-        out += [paired_tests(rows, s, reference) for s in labels
-                if s.split("@")[0] != "baseline" and s.split("@")[1:] == backend]
+    for ref in (s for s in labels if s.split("@")[0] == reference):
+        backend = ref.split("@")[1:]
+        out += [paired_tests(rows, s, ref) for s in labels
+                if s.split("@")[0] != reference and s.split("@")[1:] == backend]
     return out
 
 

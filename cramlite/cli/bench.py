@@ -143,6 +143,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from cramlite.plan_registry import plan_function
 
     strategies = _strategies(args.strategies)
+    if args.reference and args.reference not in strategies:
+        raise UserInputError(f"{args.reference!r} is not one of the strategies run "
+                             f"({', '.join(strategies)})", field="--reference")
     plan_function(args.plan)  # (a plan that cannot load: one line, exit 2, before any trial)
     args.backends = _backends(args)
     workers = _workers(args)
@@ -236,7 +239,7 @@ def _run(args, strategies, setups, workers, out) -> int:
 
     rows = by_backend(rows)  # (several backends: each strategy labelled with its own)
     summary = summarise(rows, {n: s.baseline_order for n, s in setups.items()})
-    tests = reference_tests(rows)
+    tests = reference_tests(rows, args.reference)
     text = write_summary(out, summary, tests, order_percentiles(rows) if args.all_orders else [])
     from cramlite.bench.plots import write_plots
 
@@ -306,6 +309,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     bench.add_argument("--random-setups", type=positive_int, default=None, metavar="N",
                        help="add N random setups (saved under OUT/setups)")
     bench.add_argument("--plan", default="set-table", help=PLAN_HELP)
+    bench.add_argument("--reference", metavar="STRATEGY",
+                       help="the strategy the paired tests compare every other with (one of "
+                            "--strategies; default baseline if it runs, else the first)")
     bench.add_argument("--backend", help=BACKEND_HELP)
     bench.add_argument("--backends", dest="backends_list", metavar="A,B",
                        help="run every trial on each of these backends (the report puts "

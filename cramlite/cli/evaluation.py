@@ -88,11 +88,14 @@ def _print_evaluation(args: argparse.Namespace, result, bad) -> int:
     if args.json:
         print(json.dumps(report))
         return EXIT_OK
-    print(f"{'episode':<12} {'activity':<14} {'steps':>5} {args.metric:>12} {'random':>8}")
-    for row in report["per_episode"]:
-        print(f"{row['id']:<12} {row['activity']:<14} {row['length']:>5} {row['score']:>12.3f} "
-              f"{row['random_baseline']:>8.3f}")
-    print(f"\n{args.strategy} ({args.dims}, {args.form}, protocol {args.protocol}) on "
+    if args.verbose:  # (one line per episode: 186 of them for the table-setting data)
+        print(f"{'episode':<12} {'activity':<14} {'steps':>5} {args.metric:>12} "
+              f"{'random':>8}")
+        for row in report["per_episode"]:
+            print(f"{row['id']:<12} {row['activity']:<14} {row['length']:>5} "
+                  f"{row['score']:>12.3f} {row['random_baseline']:>8.3f}")
+        print()
+    print(f"{args.strategy} ({args.dims}, {args.form}, protocol {args.protocol}) on "
           f"{report['episodes']} episodes, metric {args.metric}: mean {report['mean']:.3f}, "
           f"median {report['median']:.3f} ({report['score_definition']})")
     for activity, summary in report["by_activity"].items():
@@ -101,6 +104,8 @@ def _print_evaluation(args: argparse.Namespace, result, bad) -> int:
     base = report["random_baseline"]
     print(f"  random baseline ({base['definition']}): mean {base['mean']:.3f}, "
           f"median {base['median']:.3f}")
+    if not args.verbose:
+        print("  (--verbose: a line per episode; --json: everything)")
     return EXIT_OK
 
 
@@ -198,6 +203,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     _add_data_arguments(evaluate, METRICS)
     evaluate.add_argument("--params", help="e.g. strong_k=0.2,mid_k=0.3,food_k=1.2,c=1.7")
     evaluate.add_argument("--dims", default="xy", choices=DIM_NAMES, help="projection")
+    evaluate.add_argument("--verbose", action="store_true",
+                          help="also print a line per episode (before the summary)")
     evaluate.set_defaults(func=cmd_evaluate)
 
     fit_cmd = sub.add_parser("fit", help="grid-search a strategy's parameters (Table 3.4)")

@@ -36,7 +36,7 @@ def build_report(folder: str | Path, *, figures: bool = True,
     rows = data.rows
     baseline = {n: tuple(s.baseline_order) for n, s in data.setups.items() if s is not None}
     summary = summarise(rows, baseline)
-    tests = reference_tests(rows)
+    tests = reference_tests(rows, (data.metadata.get("arguments") or {}).get("reference"))
     page = PageData(data, summary, [t for t in tests if t["pairs"]],
                     order_percentiles(rows), strategy_colours(data.strategies), baseline)
     page.interest, page.failed_left_out = trials_of_interest(rows)

@@ -229,8 +229,10 @@ def _summary(data: PageData) -> str:
 def _tests(data: PageData) -> str:
     if not data.tests:
         return ('<h2 id="tests">Statistical tests</h2><p class="note">None: the paired tests '
-                "compare each strategy with <code>baseline</code>, and this folder holds no "
-                "baseline trials (or no other strategy).</p>")
+                "compare each strategy with a reference (<code>bench --reference</code>; "
+                "default baseline, else the first strategy), and this folder holds no other "
+                "strategy, or no successful pairs.</p>")
+    reference = e(data.tests[0]["reference"].split("@")[0])
     rows = []
     for test in data.tests:
         for measure in MEASURES[1:]:
@@ -246,11 +248,12 @@ def _tests(data: PageData) -> str:
                    e(t.get("note", "–") if t.get("p") is None else "–"))
                 + "</td></tr>")
     return ('<h2 id="tests">Statistical tests</h2><p class="note">Wilcoxon signed-rank test '
-            "of each strategy against baseline, paired by setup and trial (the same seed), "
+            f"of each strategy against {reference}, paired by setup and trial (the same "
+            "seed), "
             "on the successful pairs; and on the per-setup means (n = number of setups), "
             "as the source compared them. p &lt; 0.05: the difference is unlikely to be "
             "chance.</p><table><tr><th>comparison</th><th>measure</th><th>pairs</th>"
-            "<th>mean</th><th>baseline mean</th><th>W</th><th>p</th><th>per-setup means"
+            f"<th>mean</th><th>{reference} mean</th><th>W</th><th>p</th><th>per-setup means"
             "</th></tr>" + "".join(rows) + "</table>")
 
 
