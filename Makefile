@@ -1,26 +1,40 @@
 # Two commands: `make run` (set up + run the main job), `make test` (set up + run the tests).
+# `make run` installs what the main job needs (cramlite, its default backend, matplotlib
+# for the report's plots); `make test` adds the test and learning tools (.[dev]).
+# `make test-quick` runs the tests not marked slow (under 2 minutes).
 # `make package-check` builds the wheel and smoke-tests it in a throw-away venv (CI runs it).
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.cramlite-installed
+RUN_STAMP := $(VENV)/.cramlite-run
 
-.PHONY: run test package-check clean
+.PHONY: run test test-quick package-check clean
 
-$(STAMP): pyproject.toml
+$(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
+
+$(RUN_STAMP): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[plots]'
+	touch $(RUN_STAMP)
+
+$(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
 # Exit code 1 of a bench means some trials failed: those are results (the report shows
 # them), so `make run` goes on and its last line is the path of results/report.html.
-run: $(STAMP)
+run: $(RUN_STAMP)
 	$(BIN)/cramlite bench --out results || [ $$? -eq 1 ]
 
 test: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q
+
+test-quick: $(STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/python -m pytest -q -m "not slow"
 
 package-check:
 	PYTHON=$(PYTHON) bash .ci/package-check

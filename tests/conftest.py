@@ -19,6 +19,20 @@ NO_PYBULLET = ("pybullet is not installed (it has wheels up to Python 3.11 only)
 needs_pybullet = pytest.mark.skipif(not HAS_PYBULLET, reason=NO_PYBULLET)
 
 
+#: Modules of end-to-end tests (whole trials, benches, venvs, trained models): marked slow,
+#: left out of `make test-quick` (the full suite, `make test`, runs them; CI too).
+SLOW_MODULES = {"test_python313", "test_backends", "test_bench", "test_storage", "test_trials",
+                "test_report", "test_learning", "test_user_plans", "test_results_files",
+                "test_packaging", "test_planning_scene", "test_motion_safety",
+                "test_manipulation", "test_physics_check", "test_dask", "test_process_cache"}
+
+
+def pytest_collection_modifyitems(config, items) -> None:
+    for item in items:
+        if item.module.__name__.rsplit(".", 1)[-1] in SLOW_MODULES:
+            item.add_marker(pytest.mark.slow)
+
+
 def skip_module_without_pybullet() -> None:
     """Call at the top of a test module that is about the pybullet backend."""
     if not HAS_PYBULLET:
