@@ -99,6 +99,11 @@ def test_cli_unreachable_item_is_a_typed_failure_and_the_rest_is_done() -> None:
     assert "base poses" in data["failures"][0]["message"]
     done = [name for name, item in data["items"].items() if item["ok"]]
     assert sorted(done) == ["bowl", "breakfast-cereal", "cup", "spoon"]
+    # the plain output's order holds what was delivered; the milk it only tried
+    text = run_cli("run", "unreachable", "--backend", "kinematic").stdout
+    order = next(line for line in text.splitlines() if line.strip().startswith("order:"))
+    delivered, _, missed = order.partition("; tried and failed: ")
+    assert "milk" not in delivered and missed == "milk"
 
 
 @pytest.mark.parametrize("args", [["v9"], ["v1", "--strategy", "greedy"],

@@ -133,7 +133,12 @@ def cmd_run(args: argparse.Namespace) -> int:
         status = "success" if result.success else "FAILED"
         print(f"{result.setup} {result.plan} with {result.strategy} (seed {result.seed}) on "
               f"{result.backend}: {status}")
-        print(f"  order: {', '.join(result.order)}")
+        failed = {f.get("item") for f in result.failures} | {
+            name for name, item in result.items.items() if not item.get("ok", True)}
+        delivered = [n for n in result.order if n not in failed]
+        missed = [n for n in result.order if n in failed]
+        print(f"  order: {', '.join(delivered) or '(nothing delivered)'}"
+              + (f"; tried and failed: {', '.join(missed)}" if missed else ""))
         print(f"  driven base path {result.base_path_m:.2f} m, straight-line legs "
               f"{result.straight_line_m:.2f} m")
         print(f"  robot time {result.robot_time_s:.2f} s (driving {result.drive_s:.2f} s, arm "
