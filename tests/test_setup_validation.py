@@ -119,8 +119,10 @@ START = "start: [-0.5, -1.8, 1.5708]"
     # numbers: 400 digits, NaN, infinity, a yaw of many turns
     (SPOON_POSE, "pose: [" + "1" * 400 + ", 0.35, 0.85, 0.0]",
      ("items[0].pose", "integer with 400 digits")),
-    (SPOON_POSE, "pose: [1.45, .nan, 0.85, 0.0]", ("items[0].pose", "value 2 must be finite")),
-    (SPOON_POSE, "pose: [1.45, 0.35, .inf, 0.0]", ("items[0].pose", "value 3 must be finite")),
+    (SPOON_POSE, "pose: [1.45, .nan, 0.85, 0.0]", ("items[0].pose[1]", "y must be finite")),
+    (SPOON_POSE, "pose: [1.45, 0.35, .inf, 0.0]", ("items[0].pose[2]", "z must be finite")),
+    (SPOON_POSE, "pose: [1.45, '0.4.5', 0.85, 0.0]",
+     ("items[0].pose[1]", "y must be a number", "got '0.4.5'")),
     (SPOON_POSE, "pose: [1.45, 0.35, 0.85, 100.0]", ("items[0].pose", "within +-2 pi")),
     (START, "start: [-0.5, -1.8, 1.0e+300]", ("robot.start", "within +-2 pi")),
     (SPOON_POSE, "pose: [" + "7" * 5000 + ", 0.35, 0.85, 0.0]", ("unusable YAML",)),

@@ -326,8 +326,16 @@ def _numbers(value: Any, n: int, fld: str, shape: str, fail) -> tuple[float, ...
                 f"metres within +-{MAX_ABS_POSITION_M:g}"
             shown = f"an integer with {len(str(abs(v)))} digits" if isinstance(v, int) \
                 and not isinstance(v, bool) and abs(v) > 10**15 else _short(v)
-            raise fail(fld, f"expected {n} numbers {shape}; value {i + 1} must be finite "
-                            f"({unit}), got {shown}")
+            names = shape.strip("[]").split(", ")
+            what = names[i] if len(names) == n else f"value {i}"
+            if isinstance(v, bool) or not isinstance(v, int | float):
+                problem = f"must be a number ({unit})"
+            elif v != v or v in (float("inf"), float("-inf")):
+                problem = f"must be finite ({unit})"
+            else:
+                problem = f"must be within {unit.split(' within ')[1]} ({unit.split()[0]})"
+            raise fail(f"{fld}[{i}]", f"expected {n} numbers {shape}; {what} {problem}, "
+                                      f"got {shown}")
         out.append(float(v))
     return tuple(out)
 
