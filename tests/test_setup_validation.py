@@ -41,6 +41,34 @@ def test_a_key_given_twice_is_refused(tmp_path: Path, setup_text: str) -> None:
     _assert_user_error(run_cli("show", str(path)), str(path), "line", "'name' appears twice")
 
 
+@pytest.mark.parametrize(("old", "new"), [
+    ("description: ", "description: &a "), ("aliases: [cereal]", "aliases: &c [cereal]"),
+    ("category: mid", "category: &k mid"), ("baseline_order: [", "baseline_order: &o ["),
+    ("name: v1", "name: &n v1"), ("start: [", "start: &s ["),
+    ("pose: [1.45, 0.35, 0.85, 0.0]", "pose: &p [1.45, 0.35, 0.85, 0.0]"),
+])
+def test_yaml_anchors_and_aliases_are_refused_in_one_line(tmp_path: Path, setup_text: str,
+                                                          old: str, new: str) -> None:
+    """(A 3 KB file of nested aliases expands to gigabytes when printed.)"""
+    assert old in setup_text
+    path = _write(tmp_path, setup_text.replace(old, new, 1))
+    _assert_user_error(run_cli("show", str(path)), str(path), "line", "anchors and aliases")
+
+
+def test_an_item_type_file_with_an_alias_is_refused(tmp_path: Path, setup_text: str) -> None:
+    import shutil
+
+    from tests.conftest import ROOT
+
+    items = ROOT / "worlds" / "items"
+    shutil.copy(items / "cup.urdf", tmp_path / "mug.urdf")
+    (tmp_path / "mug.item.yaml").write_text("upright: &u true\ngrasps: [front]\n")
+    text = setup_text.replace("type: cup ", f"type: {tmp_path / 'mug.urdf'} ")
+    path = _write(tmp_path, text)
+    done = run_cli("show", str(path))
+    _assert_user_error(done, str(tmp_path / "mug.item.yaml"), "anchors and aliases")
+
+
 def test_unknown_category(tmp_path: Path, setup_text: str) -> None:
     path = _write(tmp_path, setup_text.replace("category: mid", "category: utensil"))
     _assert_user_error(run_cli("show", str(path)), str(path), "items[4].category",

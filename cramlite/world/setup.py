@@ -23,6 +23,8 @@ import yaml
 
 from cramlite.errors import SetupError
 from cramlite.resources import worlds_dir
+from cramlite.world.item_types import item_type_file
+from cramlite.world.strict_yaml import ALIASES_REFUSED, load_strict
 
 #: Relational-dependency categories of the OPM (SPEC section 1); "none" means k = 1.
 CATEGORIES = ("strong", "mid", "food", "none")
@@ -123,28 +125,6 @@ def resolve_setup_path(setup: str | Path) -> Path:
     )
 
 
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """YAML's safe loader, refusing a key given twice in one mapping (the last would
-    silently win: `name: c1` then `name: c2` is a setup named c2)."""
-
-
-def _mapping_without_duplicates(loader: _UniqueKeyLoader, node: yaml.MappingNode,
-                                deep: bool = False) -> dict:
-    seen = set()
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=True)
-        if isinstance(key, (str, int, float, bool)) or key is None:
-            if key in seen:
-                raise yaml.constructor.ConstructorError(
-                    None, None, f"the key {key!r} appears twice", key_node.start_mark)
-            seen.add(key)
-    return loader.construct_mapping(node, deep=deep)
-
-
-_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
-                                 _mapping_without_duplicates)
-
-
 def load_setup(setup: str | Path) -> Setup:
     """Read and validate a setup file (by shipped name or path)."""
     path = resolve_setup_path(setup)
@@ -156,11 +136,13 @@ def load_setup(setup: str | Path) -> Setup:
             raise SetupError(f"larger than {MAX_SETUP_BYTES} bytes; expected a setup file",
                              source=src)
         content = path.read_bytes()
-        data = yaml.load(content.decode("utf-8"), Loader=_UniqueKeyLoader)
+        data = load_strict(content.decode("utf-8"))
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark is not None else None
         problem = getattr(exc, "problem", None) or "could not parse"
+        if problem == ALIASES_REFUSED:
+            raise SetupError(f"YAML {problem}", source=src, field=where) from None
         raise SetupError(f"malformed YAML ({problem}); expected a YAML mapping",
                          source=src, field=where) from None
     except UnicodeDecodeError:
@@ -175,7 +157,7 @@ def load_setup(setup: str | Path) -> Setup:
     digest = hashlib.sha256(content)
     for urdf in (setup.world_urdf, *(item.urdf for item in setup.items)):
         digest.update(urdf.read_bytes())
-        sidecar = urdf.with_suffix(".yaml")  # (an item's type file: upright, grasps)
+        sidecar = item_type_file(urdf)  # (an item's type file: upright, grasps)
         if urdf != setup.world_urdf and sidecar.is_file():
             digest.update(sidecar.read_bytes())
     return _replace(setup, content_hash=digest.hexdigest()[:16])

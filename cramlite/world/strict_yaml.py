@@ -1,0 +1,45 @@
+"""YAML as cramlite reads its own files (setups, item types): the safe loader, a key given
+twice in one mapping refused (the last would silently win), and anchors and aliases
+refused (`&a`, `*a`, and so `<<:` merge keys): a 3 KB file of nested aliases expands to
+gigabytes when printed or walked, and no setup needs them."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import yaml
+
+ALIASES_REFUSED = ("anchors and aliases (&name, *name, and so <<: merge keys) are not "
+                   "supported; write the value out")
+
+
+class StrictLoader(yaml.SafeLoader):
+    """The safe loader without anchors, aliases or repeated keys."""
+
+    def fetch_alias(self) -> None:
+        raise yaml.scanner.ScannerError(None, None, ALIASES_REFUSED, self.get_mark())
+
+    def fetch_anchor(self) -> None:
+        raise yaml.scanner.ScannerError(None, None, ALIASES_REFUSED, self.get_mark())
+
+
+def _mapping_without_duplicates(loader: StrictLoader, node: yaml.MappingNode,
+                                deep: bool = False) -> dict:
+    seen = set()
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=True)
+        if isinstance(key, (str, int, float, bool)) or key is None:
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"the key {key!r} appears twice", key_node.start_mark)
+            seen.add(key)
+    return loader.construct_mapping(node, deep=deep)
+
+
+StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
+                             _mapping_without_duplicates)
+
+
+def load_strict(text: str) -> Any:
+    """Parse YAML text with `StrictLoader` (raises yaml.YAMLError)."""
+    return yaml.load(text, Loader=StrictLoader)
