@@ -519,3 +519,35 @@ def test_the_paired_tests_compare_with_the_reference_asked_for(tmp_path: Path) -
     assert "against nearest" in page and "nearest mean" in page
     wrong = bench(tmp_path / "wrong", *common, "--strategies", "opm", "--reference", "nope")
     assert wrong.returncode == 2 and "--reference" in wrong.stderr
+
+
+EXITING = '''
+from cramlite.strategies import Strategy
+
+class Exits(Strategy):
+    name = "exits"
+    def choose(self, remaining, agent):
+        raise SystemExit(3)
+
+class Interrupts(Strategy):
+    name = "interrupts"
+    def choose(self, remaining, agent):
+        raise KeyboardInterrupt
+'''
+
+
+def test_a_trial_raising_system_exit_or_keyboard_interrupt_is_a_row(tmp_path: Path) -> None:
+    (tmp_path / "exiting.py").write_text(EXITING)
+    out = tmp_path / "x"
+    names = [f"{tmp_path / 'exiting.py'}:{cls}" for cls in ("Exits", "Interrupts")]
+    args = ("--setups", "v1", "--strategies", ",".join(["baseline", *names]), "--trials", "1",
+            "--workers", "2", "--no-plots", "--backend", "kinematic")
+    result = bench(out, *args)
+    assert result.returncode == 1, result.stderr[-1500:]  # (failed trials, not a stop)
+    table = {r["strategy"]: r for r in rows(out)}
+    assert len(table) == 3 and table["baseline"]["success"] == "True"
+    assert table[names[0]]["error_type"] == "SystemExit"
+    assert table[names[1]]["error_type"] == "KeyboardInterrupt"
+    assert "raised by the trial's code" in table[names[1]]["error"]
+    again = bench(out, *args)  # resumed: nothing left to run, no trial stops it again
+    assert again.returncode == 1 and len(rows(out)) == 3

@@ -99,9 +99,13 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
             return row
         result = runner.run(strategy, plan, spec.seed,
                             order=list(spec.given_order) or None, trace=spec.trace or None)
-    except Exception as exc:  # recorded, the batch goes on
+    except (Exception, SystemExit, KeyboardInterrupt) as exc:  # recorded, the batch goes on
+        if isinstance(exc, KeyboardInterrupt) and not _interrupts_are_code():
+            raise  # (a real Ctrl-C to a process that takes it: stop)
         row.update(success=False, error_type=type(exc).__name__,
-                   error=f"{exc}".strip() or traceback.format_exc(limit=1).strip(),
+                   error=f"{exc}".strip() or
+                   (f"{type(exc).__name__} raised by the trial's code" if not isinstance(
+                       exc, Exception) else traceback.format_exc(limit=1).strip()),
                    wall_s=time.perf_counter() - start)
         return row
     row.update(success=result.success, order=" ".join(result.order),
@@ -115,6 +119,14 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
                actions=json.dumps(actions_only(result.actions), separators=(",", ":")),
                driven_path=json.dumps(result.driven_path, separators=(",", ":")))
     return row
+
+
+def _interrupts_are_code() -> bool:
+    """A KeyboardInterrupt here was raised by a trial's code (a plan or strategy), not by
+    Ctrl-C: local workers ignore SIGINT (the bench stops them), and a Dask worker runs
+    trials in threads that signals never reach."""
+    return signal.getsignal(signal.SIGINT) == signal.SIG_IGN or \
+        threading.current_thread() is not threading.main_thread()
 
 
 def base_row(spec: TrialSpec) -> dict[str, Any]:
