@@ -265,3 +265,13 @@ def test_the_rerun_command_of_a_setup_file_runs_as_printed(tmp_path) -> None:
     assert rerun.returncode == 0, rerun.stderr
     (row,) = rows(out)
     assert json.loads(rerun.stdout)["order"] == row["order"].split()
+
+
+def test_a_strategy_keeps_its_colour_from_one_report_to_the_next() -> None:
+    from cramlite.bench.plots import strategy_colours
+
+    one = strategy_colours(["baseline", "farthest"])
+    two = strategy_colours(["opm", "farthest", "baseline", "random"])
+    assert one["baseline"] == two["baseline"] and one["farthest"] == two["farthest"]
+    assert len(set(two.values())) == 4  # (no two strategies of a report share one)
+    assert strategy_colours(["opm@kinematic"])["opm@kinematic"] == two["opm"]

@@ -17,7 +17,7 @@ import numpy as np
 
 from cramlite.bench.specs import FIXED_ORDER
 
-LABELS = {"robot_time_s": "robot time (s): wall + driving + arm motion",
+LABELS = {"robot_time_s": "robot time (s): driving + arm motion",
           "base_path_m": "driven base path (m)", "straight_line_m": "straight-line legs (m)"}
 #: Colours of the strategies, in sorted order (matplotlib's default cycle).
 PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
@@ -33,9 +33,30 @@ BOX_STYLE: dict[str, Any] = {
     "flierprops": {"marker": "o", "markerfacecolor": "none", "markeredgecolor": "black"}}
 
 
+#: The built-in strategies keep these colours in every report.
+FIXED_COLOURS = {"opm": PALETTE[0], "baseline": PALETTE[1], "random": PALETTE[2],
+                 "nearest": PALETTE[3], "opm-two-step": PALETTE[4], "optimal": PALETTE[5]}
+
+
 def strategy_colours(strategies: Sequence[str]) -> dict[str, str]:
-    """One colour per strategy (sorted by name, so every figure of a batch agrees)."""
-    return {s: PALETTE[i % len(PALETTE)] for i, s in enumerate(sorted(strategies))}
+    """One colour per strategy, the same in every report: the built-ins' fixed ones; any
+    other name's from a hash of it (the next free colour where two names of one report
+    would share one)."""
+    import zlib
+
+    out: dict[str, str] = {}
+    for name in sorted(strategies, key=lambda n: (n.split("@")[0] not in FIXED_COLOURS, n)):
+        base = name.split("@")[0]  # (opm@kinematic: opm's colour, where it is free)
+        spare = len(PALETTE) - len(FIXED_COLOURS)  # (the colours no built-in has)
+        first = PALETTE.index(FIXED_COLOURS[base]) if base in FIXED_COLOURS else \
+            len(FIXED_COLOURS) + zlib.crc32(base.encode()) % spare
+        used = set(out.values())
+        for k in range(len(PALETTE)):
+            colour = PALETTE[(first + k) % len(PALETTE)]
+            if colour not in used or len(used) >= len(PALETTE):
+                out[name] = colour
+                break
+    return out
 
 
 def _values(rows, setup, strategy, measure) -> list[float]:
