@@ -275,3 +275,22 @@ def test_a_strategy_keeps_its_colour_from_one_report_to_the_next() -> None:
     assert one["baseline"] == two["baseline"] and one["farthest"] == two["farthest"]
     assert len(set(two.values())) == 4  # (no two strategies of a report share one)
     assert strategy_colours(["opm@kinematic"])["opm@kinematic"] == two["opm"]
+
+
+def test_plot_titles_are_not_clipped_and_few_trials_are_dots(tmp_path) -> None:
+    pytest.importorskip("matplotlib")
+    from PIL import Image
+
+    from cramlite.bench.plots import write_plots
+
+    rows = [{"setup": "v1", "strategy": s, "trial": str(t), "success": "True",
+             "robot_time_s": 80 + t + k, "base_path_m": 12 + t + k, "straight_line_m": 20,
+             "drive_s": 30, "arm_s": 50, "open_close_s": 0, "wall_s": 0.5}
+            for k, s in enumerate(("baseline", "opm")) for t in range(2)]
+    written = write_plots(rows, tmp_path)
+    for path in written:
+        image = np.asarray(Image.open(path).convert("L"))
+        band = image[: image.shape[0] // 8]  # the title's rows
+        # the title starts inside the picture: its first columns are background
+        assert band[:, :4].min() > 200, path.name
+        assert band.min() < 100, path.name  # (and there is a title)

@@ -24,7 +24,8 @@ PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e
            "#7f7f7f", "#bcbd22", "#17becf")
 #: What the parts of a box plot mean (the page's caption says the same).
 BOX_LEGEND = ("box: middle half of the trials (25-75 %)", "line: median",
-              "triangle: mean", "whiskers: up to 1.5 x the box height; circles beyond")
+              "triangle: mean", "whiskers: up to 1.5 x the box height; circles beyond",
+              "fewer than 5 trials: each trial a dot")
 
 
 BOX_STYLE: dict[str, Any] = {
@@ -57,6 +58,31 @@ def strategy_colours(strategies: Sequence[str]) -> dict[str, str]:
                 out[name] = colour
                 break
     return out
+
+
+#: Fewer trials than this are drawn as points (and their mean), not as a box.
+MIN_BOX_N = 5
+
+
+def _boxes_or_points(ax, data: list[list[float]], positions: list[float], width: float,
+                     colours: list[str]) -> None:
+    """A box per group of at least MIN_BOX_N values; the values themselves (and the mean
+    triangle) where there are fewer: a box of two trials says nothing a point does not."""
+    big = [k for k, values in enumerate(data) if len(values) >= MIN_BOX_N]
+    if big:
+        boxes = ax.boxplot([data[k] for k in big], positions=[positions[k] for k in big],
+                           widths=width, patch_artist=True, **BOX_STYLE)
+        for patch, k in zip(boxes["boxes"], big, strict=True):
+            patch.set_facecolor(colours[k])
+            patch.set_alpha(0.6)
+    for k, values in enumerate(data):
+        if values and len(values) < MIN_BOX_N:
+            offsets = np.linspace(-width / 4, width / 4, len(values)) if len(values) > 1 \
+                else np.zeros(1)
+            ax.scatter(positions[k] + offsets, values, s=28, color=colours[k],
+                       edgecolors="black", linewidths=0.6, zorder=3)
+            ax.scatter([positions[k]], [float(np.mean(values))], marker="^", s=40,
+                       facecolors="white", edgecolors="black", zorder=4)
 
 
 def _values(rows, setup, strategy, measure) -> list[float]:
@@ -93,11 +119,7 @@ def write_plots(rows: Sequence[dict[str, Any]], folder: Path) -> list[Path]:
                 positions.append(i + (j - (len(strategies) - 1) / 2) * width)
                 owners.append(strategy)
             tick_pos.append(i)
-        boxes = ax.boxplot(data, positions=positions, widths=width * 0.9, patch_artist=True,
-                           **BOX_STYLE)
-        for patch, strategy in zip(boxes["boxes"], owners, strict=True):
-            patch.set_facecolor(colours[strategy])
-            patch.set_alpha(0.6)
+        _boxes_or_points(ax, data, positions, width * 0.9, [colours[o] for o in owners])
         _label_n(ax, positions, data)
         ax.set_xticks(tick_pos, setups)
         ax.set_xlabel("setup")
@@ -109,11 +131,10 @@ def write_plots(rows: Sequence[dict[str, Any]], folder: Path) -> list[Path]:
 
         fig, ax = plt.subplots(figsize=(4.5 + 1.5 * len(strategies), 4.8))
         data = [_values(rows, None, s, measure) for s in strategies]
-        boxes = ax.boxplot(data, tick_labels=strategies, patch_artist=True, **BOX_STYLE)
-        for patch, strategy in zip(boxes["boxes"], strategies, strict=True):
-            patch.set_facecolor(colours[strategy])
-            patch.set_alpha(0.6)
-        _label_n(ax, list(range(1, len(strategies) + 1)), data)
+        places = list(range(1, len(strategies) + 1))
+        _boxes_or_points(ax, data, places, 0.5, [colours[s] for s in strategies])
+        ax.set_xticks(places, strategies)
+        _label_n(ax, places, data)
         ax.set_ylabel(LABELS[measure])
         _legend(ax, [])
         ax.set_title(f"all setups ({LABELS[measure].split(' (')[0]})", pad=16)
@@ -160,7 +181,9 @@ def _legend(ax: Any, strategies: Sequence[tuple[str, str]]) -> None:
                 Line2D([], [], marker="^", linestyle="none", markerfacecolor="white",
                        markeredgecolor="black", label=BOX_LEGEND[2]),
                 Line2D([], [], marker="o", linestyle="none", markerfacecolor="none",
-                       markeredgecolor="black", label=BOX_LEGEND[3])]
+                       markeredgecolor="black", label=BOX_LEGEND[3]),
+                Line2D([], [], marker="o", linestyle="none", markerfacecolor="grey",
+                       markeredgecolor="black", label=BOX_LEGEND[4])]
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7,
               frameon=False)
 
@@ -169,6 +192,8 @@ def _save(fig: Any, path: Path) -> Path:
     import matplotlib.pyplot as plt
 
     fig.tight_layout()
-    fig.savefig(path, dpi=110, metadata={"Software": None})
+    # (bbox "tight": a title wider than its axes is kept whole, not clipped at the edge)
+    fig.savefig(path, dpi=110, metadata={"Software": None}, bbox_inches="tight",
+                pad_inches=0.15)
     plt.close(fig)
     return path
