@@ -258,6 +258,10 @@ def test_the_rerun_command_of_a_setup_file_runs_as_printed(tmp_path) -> None:
                "--trials", "1", "--backend", "kinematic", "--no-plots")
     assert done.returncode == 0, done.stderr
     text = html.unescape((out / "report.html").read_text())
+    # the parameters as used: the default's workers (one per CPU), not "None"
+    import os
+
+    assert f"workers</th><td>{os.cpu_count()}<" in text
     (command,) = set(re.findall(r"Rerun it alone: <code>(.*?)</code>", text))
     words = shlex.split(command)
     assert words[:3] == ["cramlite", "run", str(setup)]  # its path, not its name (my6)

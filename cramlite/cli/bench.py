@@ -149,6 +149,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     plan_function(args.plan)  # (a plan that cannot load: one line, exit 2, before any trial)
     args.backends = _backends(args)
     workers = _workers(args)
+    args.workers = workers  # (the metadata and the report show the number used)
     setups = _setups(args.setups)
     if not setups and not args.random_setups:
         raise UserInputError("expected at least one setup", field="--setups")
