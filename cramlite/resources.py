@@ -12,7 +12,10 @@ from importlib import resources
 from pathlib import Path
 
 #: Shipped human-sequence files, by the short name a user may give instead of a path.
-SHIPPED_DATA = {"table-setting": "human_sequences/table_setting_sequences.csv"}
+SHIPPED_DATA = {"table-setting": "human_sequences/table_setting_sequences.csv",
+                "cooking": "human_sequences/cooking_sequences.csv",
+                "clearing-up": "human_sequences/clearing_up_sequences.csv",
+                "all": "human_sequences/all_sequences.csv"}
 
 
 def _package_dir(package: str) -> Path:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -117,3 +118,18 @@ def test_evaluate_prints_its_summary_and_the_episodes_only_when_asked() -> None:
     assert len(lines) <= 6 and lines[0].startswith("opm (xy, power")
     full = run_cli("evaluate", "table-setting", "--verbose")
     assert len(full.stdout.strip().splitlines()) >= 186 + 4
+
+
+@pytest.mark.parametrize(("name", "episodes", "activity"), [
+    ("cooking", 123, "cooking"), ("clearing-up", 17, "cleaning up"), ("all", 326, None)])
+def test_the_shipped_subsets_load_by_name(name: str, episodes: int, activity) -> None:
+    done = run_cli("evaluate", name, "--protocol", "thesis", "--json")
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    assert report["episodes"] == episodes
+    if activity:
+        assert list(report["by_activity"]) == [activity]
+    else:
+        assert set(report["by_activity"]) == {"table setting", "cooking", "cleaning up"}
+    if name == "cooking":  # (the thesis: OPM 2.78 on cooking)
+        assert report["mean"] == pytest.approx(2.78, abs=0.1)

@@ -173,7 +173,8 @@ def _print_fit(args: argparse.Namespace, episodes, summary) -> int:
 
 def _add_data_arguments(p: argparse.ArgumentParser, metrics: tuple[str, ...]) -> None:
     p.add_argument("data", help="CSV of recorded sequences (the published OPM format), or "
-                                "`table-setting` for the shipped 186 episodes")
+                                "a shipped set by name: table-setting (186 episodes), "
+                                "cooking (123), clearing-up (17) or all (326)")
     p.add_argument("--strategy", default="opm", help="strategy name (see `cramlite strategies`)")
     p.add_argument("--metric", default="ape", choices=metrics,
                    help="ape: sampled APE (median over repeats); expected-ape: its exact "

@@ -116,7 +116,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                            description="Trains on the episodes of a file in the published "
                                        "format; writes MODEL, MODEL.report.json and "
                                        "MODEL.loss.png. Needs the learn extra.")
-    train.add_argument("data", help="CSV of recorded sequences, or `table-setting`")
+    train.add_argument("data", help="CSV of recorded sequences, or a shipped set: table-setting, "
+                                    "cooking, clearing-up, all")
     train.add_argument("--model", required=True, choices=MODEL_KINDS,
                        help="cpt: CPT+; rnn: GRU on item sequences; nn: context network")
     train.add_argument("--out", required=True, help="the model file to write")
@@ -131,7 +132,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     train.set_defaults(func=cmd_train)
 
     cmp = sub.add_parser("compare", help=command_help("compare"))
-    cmp.add_argument("data", help="CSV of recorded sequences, or `table-setting`")
+    cmp.add_argument("data", help="CSV of recorded sequences, or a shipped set: table-setting, "
+                                    "cooking, clearing-up, all")
     cmp.add_argument("--strategies", required=True,
                      help="comma-separated, the first is the reference of the tests, e.g. "
                           "opm,learned:rnn.model,learned:nn.model,learned:cpt.model")
