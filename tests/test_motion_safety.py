@@ -314,7 +314,7 @@ def test_the_broadphase_misses_no_penetration() -> None:
         door = next(k for k, o in enumerate(check.obstacles) if o.label == "cupboard_door")
         for angle in (1.2, 0.6):
             check.move_world_joint("cupboard_door_joint", angle)
-            states = rng.uniform(lower, upper, size=(50, len(names)))
+            states = rng.uniform(lower, upper, size=(30, len(names)))
             frames = check._link_frames(states)
             near, meets, _ = check._near(frames)  # a motion's: all states at once
             turned, check._turned = check._turned, {}
@@ -343,8 +343,8 @@ def test_the_broadphase_misses_no_penetration() -> None:
                         assert meets[s, n] and one_meets[0, n], (check.parts[i].label,
                                                                  check.parts[j].label)
         print("penetrating", penetrating, "of the robot itself", self_hits, "pruned", pruned)
-        assert pruned > 30  # the door's own box spared exact checks its bounds would need
-        assert penetrating > 60 and self_hits > 30  # the draw reaches into things often
+        assert pruned > 20  # the door's own box spared exact checks its bounds would need
+        assert penetrating > 40 and self_hits > 25  # the draw reaches into things often
 
 
 def test_a_carry_pose_depends_on_the_rest_of_the_robot_not_on_earlier_trials() -> None:

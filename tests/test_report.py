@@ -298,3 +298,16 @@ def test_plot_titles_are_not_clipped_and_few_trials_are_dots(tmp_path) -> None:
         # the title starts inside the picture: its first columns are background
         assert band[:, :4].min() > 200, path.name
         assert band.min() < 100, path.name  # (and there is a title)
+
+
+def test_pictures_that_cannot_be_written_are_one_line(bench_dir: Path, tmp_path) -> None:
+    folder = tmp_path / "copy"
+    shutil.copytree(bench_dir, folder)
+    blocked = folder / "report" / f"map-{safe_stem(SETUPS[0])}.png"
+    if blocked.exists():
+        blocked.unlink()
+    blocked.mkdir(parents=True)  # (a folder where the map's picture goes: it cannot be written)
+    done = cli("report", str(folder))
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert "Traceback" not in done.stderr and "cannot write the report's pictures" in lines[-1]

@@ -140,8 +140,7 @@ def test_an_unknown_container_is_a_typed_failure(c2_world) -> None:
         OpenAction("oven").perform(ctx)
 
 
-@pytest.mark.parametrize("setup, strategy", [("c1", "opm"), ("c1", "baseline"),
-                                             ("c3", "opm")])
+@pytest.mark.parametrize("setup, strategy", [("c1", "opm"), ("c3", "opm")])
 def test_stored_items_are_fetched_and_every_container_is_closed_again(
         setup: str, strategy: str, tmp_path: Path) -> None:
     trace = tmp_path / "t.jsonl"

@@ -175,3 +175,13 @@ def test_replay_refuses_an_output_it_cannot_write_before_rendering(tmp_path: Pat
     result = run_cli("replay", str(path), "--out", str(tmp_path / "out.gif"))
     assert result.returncode == 2 and "--out: is a folder" in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_a_trace_that_cannot_be_written_is_one_line_naming_it() -> None:
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full here")
+    done = run_cli("run", "v1", "--backend", "kinematic", "--trace", "/dev/full")
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in done.stderr
+    assert "/dev/full" in lines[0] and "cannot write the trace" in lines[0]

@@ -52,11 +52,15 @@ def build_report(folder: str | Path, *, figures: bool = True,
                              "them.")
     elif not _have_matplotlib():
         page.figures_note = NO_MATPLOTLIB
-    else:
-        _pictures(data, page, media, written, say)
-    if max_replays > 0:
-        _replays(data, page, media, written, max_replays, speed or DEFAULT_SPEED, say)
-    _tidy(media, written)
+    try:
+        if figures and _have_matplotlib():
+            _pictures(data, page, media, written, say)
+        if max_replays > 0:
+            _replays(data, page, media, written, max_replays, speed or DEFAULT_SPEED, say)
+        _tidy(media, written)
+    except OSError as exc:  # a full disk, a read-only folder
+        raise UserInputError(f"cannot write the report's pictures ({exc.strerror or exc})",
+                             source=str(getattr(exc, "filename", None) or media)) from None
     out = data.path / PAGE
     partial = data.path / f"{PAGE}.{os.getpid()}.part"  # two builds at once never mix
     try:

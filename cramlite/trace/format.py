@@ -21,9 +21,10 @@ line and names the one at fault.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
@@ -44,26 +45,47 @@ class TraceError(UserInputError):
     """A trace file that is missing or malformed (names the line)."""
 
 
+class TraceWriteError(UserInputError):
+    """The trace file cannot be written (a full disk, a read-only folder): names it."""
+
+
 class TraceWriter:
-    """Writes a trace line by line (the header first)."""
+    """Writes a trace line by line (the header first); a failed write raises
+    TraceWriteError naming the file and the reason."""
 
     def __init__(self, path: str | Path, header: dict[str, Any]):
         missing = [k for k in HEADER_KEYS if k not in header and k != "format"]
         if missing:
             raise ValueError(f"trace header misses {missing}")
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         self.joints = list(header["joints"])
         self.world_joints = list(header["world_joints"])
-        self._handle: IO[str] | None = self.path.open("w", encoding="utf-8")
+        self._handle: IO[str] | None = None
+        with self._reporting():
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._handle = self.path.open("w", encoding="utf-8")
         self._write({"format": TRACE_FORMAT, **{k: header[k] for k in HEADER_KEYS[1:]},
                      **{k: header[k] for k in HEADER_KEYS_2 if k in header}})
         self.states = 0
         self.last_t = 0.0
 
+    @contextlib.contextmanager
+    def _reporting(self) -> Iterator[None]:
+        try:
+            yield
+        except OSError as exc:
+            handle, self._handle = self._handle, None
+            if handle is not None:
+                with contextlib.suppress(OSError):
+                    handle.close()
+            raise TraceWriteError(f"cannot write the trace ({exc.strerror or exc})",
+                                  source=str(self.path), field="--trace") from None
+
     def _write(self, record: dict[str, Any]) -> None:
         assert self._handle is not None, "trace already closed"
-        self._handle.write(json.dumps(record, separators=(",", ":"), allow_nan=False) + "\n")
+        with self._reporting():
+            self._handle.write(json.dumps(record, separators=(",", ":"), allow_nan=False)
+                               + "\n")
 
     def write_state(self, t: float, base: Sequence[float], q: Sequence[float],
                     w: Sequence[float], held: dict[str, str],
@@ -80,7 +102,8 @@ class TraceWriter:
 
     def close(self) -> None:
         if self._handle is not None:
-            self._handle.close()
+            with self._reporting():
+                self._handle.close()
             self._handle = None
 
 
