@@ -115,3 +115,25 @@ def test_replay_check_prints_physics_findings_and_exits_1(trace, tmp_path) -> No
     assert "not physical: tilt: milk: 165 deg (at most 15 deg)" in done.stdout
     assert f"line {i + 2}" in done.stdout
     assert "Traceback" not in done.stderr
+
+
+@pytest.mark.parametrize(("change", "kind"), [
+    ("torso", "joint limit"), ("elbow", "joint limit"), ("quaternion", "orientation"),
+    ("base", "base")])
+def test_impossible_states_are_findings(trace, change: str, kind: str) -> None:
+    """(The red-team's torso at 5 m, elbow at 100 rad, zero quaternion, base at 1e300 m:
+    well-formed lines, so no exit 2, but no robot can be there.)"""
+    bad = copy.deepcopy(trace)
+    i = len(bad.states) // 2
+    state = bad.states[i]
+    joints = bad.header["joints"]
+    if change == "torso":
+        state["q"][joints.index("torso_lift_joint")] = 5.0
+    elif change == "elbow":
+        state["q"][joints.index("r_elbow_flex_joint")] = 100.0
+    elif change == "quaternion":
+        state["objects"]["cup"][3:] = [0.0, 0.0, 0.0, 0.0]
+    else:
+        state["base"][0] = 1e300
+    found = [f for f in physics_findings(bad) if f.kind == kind]
+    assert found and found[0].line == i + 2, physics_findings(bad)

@@ -409,7 +409,17 @@ def checker_for(trace: Trace) -> TraceChecker:
 
 
 def _item_frames(state: dict[str, Any]) -> dict[str, np.ndarray]:
-    return {name: pose_matrix(pose[:3], pose[3:]) for name, pose in state["objects"].items()}
+    return {name: object_frame(pose) for name, pose in state["objects"].items()}
+
+
+def object_frame(pose: list[float]) -> np.ndarray:
+    """An object's recorded pose [x, y, z, qx, qy, qz, qw] as a matrix; a quaternion that
+    is not of unit length is normalised (none at all: no turn), so a trace with one is
+    still checked (`physics_findings` reports it as an impossible state)."""
+    q = np.asarray(pose[3:], dtype=float)
+    norm = float(np.linalg.norm(q))
+    q = q / norm if norm > 1e-9 else np.array([0.0, 0.0, 0.0, 1.0])
+    return pose_matrix(pose[:3], q)
 
 
 def _interpolate(a: dict[str, Any], b: dict[str, Any], s: float) -> dict[str, Any]:

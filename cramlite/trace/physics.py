@@ -13,7 +13,9 @@ From the recorded states alone (no planner code):
   states (or cramlite's defaults), with `ACCEL_TOLERANCE` for the differencing;
 - yaw: at the end, an item put at a target of the setup (setting the table; clearing up
   into its container) stands within `YAW_TOLERANCE_DEG` of the target's yaw, up to the
-  item's symmetry.
+  item's symmetry;
+- impossible states: a joint beyond the URDF's limits (as the header states them), an
+  object's quaternion that is not a rotation, a base nowhere near any kitchen.
 
 Each finding names the thing, the value and the limit, the robot time and the trace line.
 """
@@ -26,8 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from cramlite.motion.base_timing import BaseLimits
-from cramlite.scene.transforms import pose_matrix, quat_yaw
-from cramlite.trace.check import TraceChecker, checker_for, penetration
+from cramlite.scene.transforms import quat_yaw
+from cramlite.trace.check import TraceChecker, checker_for, object_frame, penetration
 from cramlite.trace.format import Trace
 
 GRIP_TOLERANCE_M = 0.002
@@ -45,7 +47,7 @@ OPEN_FINGER_RAD = 0.54
 class Finding:
     """One thing the robot could not have done so."""
 
-    kind: str  #: grip | tilt | base acceleration | yaw
+    kind: str  #: grip | tilt | base acceleration | yaw | joint limit | orientation | base
     what: str
     value: float
     limit: float
@@ -76,7 +78,54 @@ def physics_findings(trace: Trace, checker: TraceChecker | None = None) -> list[
         note(finding)
     for finding in _yaws(trace, checker):
         note(finding)
+    for finding in _impossible(trace):
+        note(finding)
     return sorted(worst.values(), key=lambda f: (f.kind, -f.value))
+
+
+#: A pose's quaternion may be this far from unit length (the trace's 6 digits).
+QUATERNION_TOLERANCE = 1e-3
+#: A base this far from the world's origin is nowhere in any kitchen (m).
+MAX_BASE_DISTANCE_M = 100.0
+
+
+def _impossible(trace: Trace):
+    """States no robot can be in: joints beyond the URDF's limits (the header's), object
+    orientations that are not rotations, a base far outside any kitchen."""
+    from cramlite.scene.models import pr2_model
+
+    limits = (trace.header.get("robot") or {}).get("joint_limits") or {}
+    joints = trace.header["joints"]
+    # (a mimic joint follows its leader, as the URDF's mimic tag says; its own limits are
+    # not the motion's: the PR2's right finger roots turn opposite to their limits' sign)
+    model = pr2_model()
+    followers = {m.joint for m in model.mimics}
+    bounds = [(i, name, limits[name][0], limits[name][1]) for i, name in enumerate(joints)
+              if name in limits and name not in followers
+              and isinstance(limits[name], list) and len(limits[name]) >= 2]
+    for k, state in enumerate(trace.states):
+        line = k + 2
+        for i, name, lower, upper in bounds:
+            q = state["q"][i]
+            beyond = max((lower - q) if lower is not None else 0.0,
+                         (q - upper) if upper is not None else 0.0)
+            if beyond > 1e-4:
+                joint = model.joints.get(name)
+                unit = "m" if joint is not None and joint.kind == "prismatic" else "rad"
+                span = f"[{'-inf' if lower is None else f'{lower:g}'}, " \
+                       f"{'inf' if upper is None else f'{upper:g}'}]"
+                yield Finding("joint limit", f"{name} at {q:g} {unit}, its limits {span}",
+                              round(beyond, 4), 0.0, unit, state["t"], line)
+        for name, pose in state["objects"].items():
+            norm = math.sqrt(sum(v * v for v in pose[3:]))
+            if abs(norm - 1.0) > QUATERNION_TOLERANCE:
+                yield Finding("orientation", f"{name}'s quaternion has norm {norm:g}, not 1",
+                              round(abs(norm - 1.0), 4), QUATERNION_TOLERANCE, "", state["t"],
+                              line)
+        x, y = state["base"][0], state["base"][1]
+        if math.hypot(x, y) > MAX_BASE_DISTANCE_M:
+            yield Finding("base", "the base outside any kitchen", round(math.hypot(x, y), 1),
+                          MAX_BASE_DISTANCE_M, "m", state["t"], line)
 
 
 def _finger(trace: Trace, state: dict, arm: str) -> float:
@@ -110,7 +159,7 @@ def _grips(trace: Trace, checker: TraceChecker):
         grips: list[tuple[str, list]] = []
         for name, arm in held.items():
             if name in state["objects"]:
-                frame = pose_matrix(state["objects"][name][:3], state["objects"][name][3:])
+                frame = object_frame(state["objects"][name])
                 grips.append((arm, [(body, frame @ body.shape.in_link)
                                     for body in checker.item_bodies[name]]))
         closing = [arm for arm in ("right", "left") if arm not in held.values()
@@ -141,7 +190,7 @@ def _tilts(trace: Trace, checker: TraceChecker):
             pose = state["objects"].get(name)
             if pose is None:
                 continue
-            frame = pose_matrix(pose[:3], pose[3:])
+            frame = object_frame(pose)
             tilt = math.acos(max(-1.0, min(1.0, float(frame[2, 2]))))
             if tilt > limit + 1e-6:
                 yield Finding("tilt", name, round(math.degrees(tilt), 1),
