@@ -19,6 +19,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from cramlite.digests import file_digest
 from cramlite.errors import UserInputError
 
 
@@ -44,18 +45,16 @@ def code_file(text: str) -> Path | None:
 def file_hash(text: str) -> str:
     """A short hash of the content of the file a reference names ("" for a module)."""
     path = code_file(text)
-    if path is None or not path.is_file():
-        return ""
-    return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
+    return file_digest(path) if path is not None and path.is_file() else ""
 
 
 def absolute_reference(text: str, folder: str | Path) -> str:
     """The reference as a process started elsewhere (a Dask worker) loads it: a relative
     file made absolute against `folder`, a module found only in `folder` as its file."""
-    if not is_code_reference(text) or text.startswith("learned:"):
-        if text.startswith("learned:"):
-            model = Path(text[len("learned:"):]).expanduser()
-            return text if model.is_absolute() else f"learned:{Path(folder) / model}"
+    if text.startswith("learned:"):
+        model = Path(text[len("learned:"):]).expanduser()
+        return text if model.is_absolute() else f"learned:{Path(folder) / model}"
+    if not is_code_reference(text):
         return text
     module, _, attr = text.rpartition(":")
     if names_file(text):
@@ -91,14 +90,13 @@ def trial_code_hash(plan: str, strategy: str) -> str:
 
 def _content_hash(path: Path) -> str:
     """A file's content hash, or a folder's (its files' names and contents)."""
-    digest = hashlib.sha256()
     if path.is_file():
-        digest.update(path.read_bytes())
-    elif path.is_dir():
-        for item in sorted(p for p in path.rglob("*") if p.is_file()):
-            digest.update(str(item.relative_to(path)).encode() + b"\0" + item.read_bytes())
-    else:
+        return file_digest(path)
+    if not path.is_dir():
         return ""
+    digest = hashlib.sha256()
+    for item in sorted(p for p in path.rglob("*") if p.is_file()):
+        digest.update(str(item.relative_to(path)).encode() + b"\0" + item.read_bytes())
     return digest.hexdigest()[:16]
 
 

@@ -15,7 +15,6 @@ another, which coal's surface-crossing test cannot see).
 from __future__ import annotations
 
 import functools
-import hashlib
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
@@ -25,6 +24,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from cramlite.digests import file_digest  # noqa: F401  (re-exported)
 from cramlite.world.item_types import ItemType, item_type, item_type_file
 from cramlite.world.pr2 import PR2_URDF_SUBPATH, pr2_share_folder
 
@@ -205,10 +205,6 @@ def _axis(joint) -> np.ndarray:
         return np.asarray(joint.extract().axis, dtype=float)
     except AttributeError:
         return np.zeros(3)
-
-
-def file_digest(path: Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
 
 
 # -- the PR2 ------------------------------------------------------------------------------
