@@ -551,3 +551,16 @@ def test_a_trial_raising_system_exit_or_keyboard_interrupt_is_a_row(tmp_path: Pa
     assert "raised by the trial's code" in table[names[1]]["error"]
     again = bench(out, *args)  # resumed: nothing left to run, no trial stops it again
     assert again.returncode == 1 and len(rows(out)) == 3
+
+
+def test_the_default_reference_follows_the_order_asked_not_the_order_finished() -> None:
+    from cramlite.bench.summary import default_reference, reference_tests
+
+    assert default_reference(["opm", "nearest"]) == "opm"
+    assert default_reference(["nearest", "baseline"]) == "baseline"
+    rows = [{"setup": "v1", "trial": t, "strategy": s, "success": "True", "robot_time_s": "1",
+             "wall_s": "1", "drive_s": "1", "arm_s": "1", "open_close_s": "0",
+             "base_path_m": "1", "straight_line_m": "1", "order": "", "given_order": ""}
+            for t in (0, 1) for s in ("nearest", "opm")]  # (nearest's rows came in first)
+    tests = reference_tests(rows, default_reference(["opm", "nearest"]))
+    assert [(t["strategy"], t["reference"]) for t in tests] == [("nearest", "opm")]

@@ -62,6 +62,12 @@ def summarise(rows: Sequence[dict[str, Any]], baseline_orders: dict[str, Sequenc
     return out
 
 
+def default_reference(strategies: Sequence[str]) -> str:
+    """The reference when none is asked for: baseline if it runs, else the first strategy
+    *as asked* (not the first whose trials happen to finish first)."""
+    return "baseline" if "baseline" in strategies else strategies[0]
+
+
 def reference_strategy(rows: Sequence[dict[str, Any]], asked: str | None = None) -> str:
     """The strategy the paired tests compare with: the one asked for (`bench --reference`),
     else baseline if there are baseline trials, else the first strategy of the rows."""

@@ -140,12 +140,16 @@ def cmd_bench(args: argparse.Namespace) -> int:
         except ImportError:
             raise UserInputError("the dask executor needs Dask: pip install 'cramlite[dask]'",
                                  field="--executor") from None
+    from cramlite.bench.summary import default_reference
     from cramlite.plan_registry import plan_function
 
     strategies = _strategies(args.strategies)
     if args.reference and args.reference not in strategies:
         raise UserInputError(f"{args.reference!r} is not one of the strategies run "
                              f"({', '.join(strategies)})", field="--reference")
+    # (resolved here, from the order asked, not from the order trials finish in; the
+    # metadata records it so that `cramlite report` compares with the same one)
+    args.reference = args.reference or default_reference(strategies)
     plan_function(args.plan)  # (a plan that cannot load: one line, exit 2, before any trial)
     args.backends = _backends(args)
     workers = _workers(args)
