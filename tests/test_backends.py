@@ -13,7 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cramlite.backends import available_backends, backend_class, default_backend
+from cramlite.backends import (
+    available_backends,
+    backend_class,
+    default_backend,
+    runnable_backends,
+)
 from cramlite.errors import UserInputError
 from cramlite.trial import TrialRunner
 from cramlite.world.setup import load_setup
@@ -29,19 +34,22 @@ import importlib, sys
 from pathlib import Path
 sys.modules["pybullet"] = None          # import pybullet -> ImportError; find_spec -> None
 sys.modules["pybullet_data"] = None
+sys.modules["mujoco"] = None
 import cramlite
 root = Path(cramlite.__file__).parent
 failed = []
 for path in sorted(root.rglob("*.py")):
     parts = path.relative_to(root.parent).with_suffix("").parts
     name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
-    if name.startswith("cramlite.backends.pybullet") or name == "cramlite.__main__":
+    if name.startswith(("cramlite.backends.pybullet", "cramlite.backends.mujoco")) \
+            or name == "cramlite.__main__":
         continue
     try:
         importlib.import_module(name)
     except Exception as exc:
         failed.append(f"{name}: {type(exc).__name__}: {exc}")
-loaded = sorted(m for m in sys.modules if m.startswith("cramlite.backends.pybullet"))
+loaded = sorted(m for m in sys.modules
+                if m.startswith(("cramlite.backends.pybullet", "cramlite.backends.mujoco")))
 for line in failed + [f"loaded {m}" for m in loaded]:
     print(line)
 from cramlite.backends import default_backend
@@ -49,12 +57,12 @@ print("default", default_backend())
 """
 
 
-def test_no_module_outside_the_pybullet_backend_needs_pybullet() -> None:
+def test_no_module_outside_the_simulators_backends_needs_their_simulator() -> None:
     result = subprocess.run([sys.executable, "-c", IMPORT_WALK], capture_output=True,
                             text=True, cwd=ROOT, timeout=300)
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
-    assert lines[-1] == "default kinematic", lines  # (mujoco is not installed here)
+    assert lines[-1] == "default kinematic", lines  # (neither simulator importable)
     assert lines[:-1] == [], "\n".join(lines[:-1])
 
 
@@ -82,6 +90,13 @@ def test_without_pybullet_run_uses_the_kinematic_backend_and_says_so(tmp_path: P
     assert asked.stderr.count("\n") == 1 and "pybullet" in asked.stderr, asked.stderr
 
 
+needs_mujoco = pytest.mark.skipif(importlib.util.find_spec("mujoco") is None,
+                                  reason="mujoco is not installed (cramlite[mujoco])")
+#: The setups on which MuJoCo's trials are compared with PyBullet's in the suite (all
+#: eight: benchmarks/bench_two_simulators.py).
+MUJOCO_SETUPS = ("v1", "c1")
+
+
 @needs_pybullet
 @pytest.mark.parametrize("setup", ["v1", "v2", "v3", "v4", "v5", "c1", "c2", "c3"])
 def test_kinematic_and_pybullet_backends_give_the_same_trials(setup: str) -> None:
@@ -102,6 +117,26 @@ def test_kinematic_and_pybullet_backends_give_the_same_trials(setup: str) -> Non
         assert kin.robot_time_s == pytest.approx(py.robot_time_s, rel=0.10)
         for name, item in kin.items.items():
             assert np.allclose(item["position"], py.items[name]["position"], atol=0.02), name
+
+
+@needs_pybullet
+@needs_mujoco
+@pytest.mark.parametrize("setup", MUJOCO_SETUPS)
+def test_two_simulators_agree_on_orders_success_and_where_items_settle(setup: str) -> None:
+    """PyBullet and MuJoCo each settle the items they are given: the same orders and
+    success, every item within the placing tolerance of its target in both, and within
+    1 cm of where the other simulator left it; drawers and doors closed in both."""
+    results = {}
+    for backend in ("pybullet", "mujoco"):
+        with TrialRunner(setup, backend=backend) as runner:
+            results[backend] = [runner.run(s, seed=0) for s in ("opm", "baseline")]
+    for py, mj in zip(results["pybullet"], results["mujoco"], strict=True):
+        assert py.success and mj.success, (py.failures, mj.failures)
+        assert mj.backend == "mujoco" and py.order == mj.order
+        for name, item in mj.items.items():
+            assert item["ok"] and py.items[name]["ok"], (name, item, py.items[name])
+            gap = np.linalg.norm(np.subtract(item["position"], py.items[name]["position"]))
+            assert gap < 0.01, (setup, py.strategy, name, gap)
 
 
 def test_default_backend_is_the_first_installed_in_the_defined_order() -> None:
@@ -186,7 +221,9 @@ def test_unknown_backend_is_refused_naming_the_known_ones() -> None:
 
 
 def test_bench_on_two_backends_keeps_both_in_rows_and_report(tmp_path: Path) -> None:
-    backends = "pybullet,kinematic" if default_backend() == "pybullet" else "kinematic,recording"
+    runnable = runnable_backends()
+    backends = ("pybullet,mujoco" if {"pybullet", "mujoco"} <= set(runnable) else
+                "mujoco,kinematic" if "mujoco" in runnable else "kinematic,recording")
     out = tmp_path / "results"
     result = run_cli("bench", "--setups", "v1", "--strategies", "opm", "--trials", "1",
                      "--backends", backends, "--workers", "1", "--no-plots", "--traces",
@@ -200,6 +237,9 @@ def test_bench_on_two_backends_keeps_both_in_rows_and_report(tmp_path: Path) -> 
     summary = (out / "summary.md").read_text()
     for name in backends.split(","):
         assert f"opm@{name}" in summary
+    assert "Backends side by side" in summary and "1 of 1 trials agree" in summary
+    page = (out / "report.html").read_text()
+    assert 'id="backends"' in page and "<b>1 of 1</b> trials agree" in page
     traces = sorted(p.name for p in (out / "traces").iterdir())
     assert len(traces) == 2 and all(any(b in t for b in backends.split(",")) for t in traces)
     # resumed: nothing to do (the backend is part of the key)
@@ -219,3 +259,24 @@ def test_setup_object_runs_on_each_backend_without_touching_another() -> None:
         again = a.run("opm", seed=0)
     assert first.order == second.order == again.order
     assert first.robot_time_s == second.robot_time_s == again.robot_time_s
+
+
+def test_the_backends_side_by_side_show_where_they_disagree(tmp_path: Path) -> None:
+    from cramlite.bench.agreement import agreement_markdown, backend_agreement
+
+    def row(backend: str, cup_x: float, order: str = "cup bowl") -> dict:
+        items = {"cup": {"position": [cup_x, 0.5, 0.85]}, "bowl": {"position": [1.0, 0, 0.85]}}
+        return {"setup": "v1", "strategy": "opm", "trial": "0", "given_order": "",
+                "backend": backend, "order": order, "success": "True",
+                "items": json.dumps(items)}
+
+    same = backend_agreement([row("mujoco", 1.004), row("pybullet", 1.0)])
+    assert [x["agree"] for x in same] == [True]
+    assert same[0]["gap_m"] == pytest.approx(0.004)
+    apart = backend_agreement([row("mujoco", 1.02), row("pybullet", 1.0)])
+    assert not apart[0]["agree"] and apart[0]["worst_item"] == "cup"
+    text = "\n".join(agreement_markdown(apart))
+    assert "0 of 1 trials agree" in text and "2.00 cm (cup)" in text
+    other = backend_agreement([row("mujoco", 1.0, "bowl cup"), row("pybullet", 1.0)])
+    assert not other[0]["agree"] and not other[0]["same_order"]
+    assert backend_agreement([row("mujoco", 1.0)]) == []  # (one backend: nothing to compare)

@@ -1,5 +1,6 @@
-"""cramlite on Python 3.13, where pybullet has no wheel: the wheel installs from wheels
-only (no compiler) into a fresh venv, and the main commands work on the default backend.
+"""cramlite on Python 3.13, where pybullet has no wheel: the wheel with its mujoco extra
+installs from wheels only (no compiler) into a fresh venv, the default backend is MuJoCo,
+and the main commands work on it (physics settling, offscreen pictures).
 
 Uses a python3.13 from PATH, from pyenv, or from $CRAMLITE_PYTHON313; skipped (saying
 so) where there is none.
@@ -49,36 +50,40 @@ def _run(args: list[str], cwd: Path, timeout: float = 600) -> subprocess.Complet
 
 @pytest.fixture(scope="module")
 def venv(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A Python 3.13 venv with the cramlite wheel installed from wheels only."""
+    """A Python 3.13 venv with the cramlite wheel and its mujoco extra, from wheels only."""
     work = tmp_path_factory.mktemp("py313")
     _run([PYTHON313, "-m", "pip", "wheel", "--quiet", "--no-deps", "--wheel-dir",
           str(work / "dist"), str(ROOT)], cwd=work)
     (wheel,) = (work / "dist").glob("cramlite-*.whl")
     _run([PYTHON313, "-m", "venv", str(work / "venv")], cwd=work)
     python = work / "venv" / "bin" / "python"
-    _run([str(python), "-m", "pip", "install", "--quiet", "--only-binary=:all:", str(wheel)],
+    _run([str(python), "-m", "pip", "install", "--quiet", "--only-binary=:all:",
+          f"{wheel}[mujoco]"],
          cwd=work, timeout=900)
     return work / "venv"
 
 
-def test_the_wheel_installs_on_python_313_without_pybullet_and_runs(venv: Path,
-                                                                    tmp_path: Path) -> None:
+def test_the_wheel_installs_on_python_313_with_mujoco_without_pybullet_and_runs(
+        venv: Path, tmp_path: Path) -> None:
     python = venv / "bin" / "python"
     cramlite = str(venv / "bin" / "cramlite")
     listed = _run([str(python), "-m", "pip", "list", "--format=json"], cwd=tmp_path)
     packages = {p["name"].lower() for p in json.loads(listed.stdout)}
-    assert "pybullet" not in packages and {"cramlite", "pin", "ompl", "coal"} <= packages
+    assert "pybullet" not in packages
+    assert {"cramlite", "pin", "ompl", "coal", "mujoco-core"} <= packages
     for setup in ("v1", "c1"):
         ran = _run([cramlite, "run", setup, "--trace", f"{setup}.jsonl", "--json"], cwd=tmp_path)
         result = json.loads(ran.stdout)
-        assert result["success"] and result["backend"] == "kinematic", result
+        assert result["success"] and result["backend"] == "mujoco", result
     opm = json.loads(_run([cramlite, "run", "v1", "--strategy", "opm", "--json"],
                           cwd=tmp_path).stdout)
     assert " ".join(opm["order"]) == "bowl breakfast-cereal cup spoon milk"  # Table 4.3
     for setup in ("v1", "c1"):
         checked = _run([cramlite, "replay", f"{setup}.jsonl", "--check"], cwd=tmp_path)
         assert "nothing penetrating" in checked.stdout, checked.stdout
-    _run([cramlite, "replay", "c1.jsonl", "--out", "c1.gif", "--speed", "40"], cwd=tmp_path)
+    drawn = _run([cramlite, "replay", "c1.jsonl", "--out", "c1.gif", "--speed", "40"],
+                 cwd=tmp_path)
+    assert "drawn as the mujoco backend draws" in drawn.stdout, drawn.stdout
     assert (tmp_path / "c1.gif").stat().st_size > 10_000
     _run([cramlite, "bench", "--trials", "1", "--out", "results"], cwd=tmp_path)
     rows = (tmp_path / "results" / "trials.csv").read_text().splitlines()

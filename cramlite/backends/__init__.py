@@ -2,7 +2,8 @@
 or a real robot implements) and loads its world from a setup; planning never touches it
 (it asks the planning scene, which the process modules' reports keep up to date).
 
-Built in: `pybullet` (physics settling, TinyRenderer images), `kinematic` (no physics
+Built in: `pybullet` (physics settling, TinyRenderer images), `mujoco` (physics settling,
+offscreen OpenGL images; `pip install 'cramlite[mujoco]'`), `kinematic` (no physics
 engine, every Python) and `recording` (kinematic, and keeps every timed trajectory it is
 sent: what a real robot's driver would receive). A third-party package registers a
 `Backend` subclass under the entry-point group `cramlite.backends`:
@@ -33,8 +34,11 @@ from cramlite.world.setup import Setup
 ENTRY_POINT_GROUP = "cramlite.backends"
 #: Built-in backends by name: (module, class, the module a working install needs).
 BUILTIN = {"pybullet": ("cramlite.backends.pybullet", "PyBulletBackend", "pybullet"),
+           "mujoco": ("cramlite.backends.mujoco", "MujocoBackend", "mujoco"),
            "kinematic": ("cramlite.backends.kinematic", "KinematicBackend", None),
            "recording": ("cramlite.backends.recording", "RecordingBackend", None)}
+#: What to install for a built-in backend whose simulator is missing.
+INSTALL_HINT = {"pybullet": "pybullet", "mujoco": "'cramlite[mujoco]'"}
 #: The order in which the default is chosen: the first whose simulator imports.
 DEFAULT_ORDER = ("pybullet", "mujoco", "kinematic")
 
@@ -72,8 +76,9 @@ def backend_class(name: str) -> type[Backend]:
         module, cls, needs = BUILTIN[name]
         if needs is not None and importlib.util.find_spec(needs) is None:
             raise UserInputError(f"the {name} backend needs the {needs} package, which is not "
-                                 f"installed here (pip install {needs}); expected one of the "
-                                 f"backends installed: {', '.join(runnable_backends())}",
+                                 f"installed here (pip install {INSTALL_HINT.get(name, needs)});"
+                                 " expected one of the backends installed: "
+                                 f"{', '.join(runnable_backends())}",
                                  field="--backend")
         return getattr(importlib.import_module(module), cls)
     plugins = _plugins()

@@ -245,7 +245,10 @@ def _run(args, strategies, setups, workers, out) -> int:
     rows = by_backend(rows)  # (several backends: each strategy labelled with its own)
     summary = summarise(rows, {n: s.baseline_order for n, s in setups.items()})
     tests = reference_tests(rows, args.reference)
-    text = write_summary(out, summary, tests, order_percentiles(rows) if args.all_orders else [])
+    from cramlite.bench.agreement import backend_agreement
+
+    text = write_summary(out, summary, tests, order_percentiles(rows) if args.all_orders else [],
+                         backend_agreement(rows))
     from cramlite.bench.plots import write_plots
 
     plots = [] if args.no_plots else write_plots(rows, out)

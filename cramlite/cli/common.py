@@ -47,7 +47,7 @@ def command_help(name: str) -> str:
     return COMMANDS[name][1]
 
 
-BACKEND_HELP = ("what executes (and draws) it: pybullet, kinematic, recording or a "
+BACKEND_HELP = ("what executes (and draws) it: pybullet, mujoco, kinematic, recording or a "
                 "plugin's (default: pybullet if it is installed, else mujoco if it is, "
                 "else kinematic)")
 

@@ -1,11 +1,12 @@
 """Pictures of setups and of traced states, headless.
 
-Two renderers draw the same scenes from the same cameras: PyBullet's TinyRenderer (the
-pybullet backend's, where pybullet is installed) and cramlite's own rasteriser of the
-planning scene's shapes (`cramlite.render.raster`: numpy and Pillow only, so pictures,
-replays and the report's animations work on any Python, with no simulator and no OpenGL).
-A picture is drawn by the renderer of the backend asked for: `pybullet` draws with
-TinyRenderer, every other backend with cramlite's own.
+Three renderers draw the same scenes from the same cameras: PyBullet's TinyRenderer (the
+pybullet backend's, where pybullet is installed), MuJoCo's offscreen OpenGL renderer (the
+mujoco backend's: EGL or OSMesa) and cramlite's own rasteriser of the planning scene's
+shapes (`cramlite.render.raster`: numpy and Pillow only, so pictures, replays and the
+report's animations work on any Python, with no simulator and no OpenGL). A picture is
+drawn by the renderer of the backend asked for: `pybullet` with TinyRenderer, `mujoco`
+with MuJoCo's, every other backend with cramlite's own.
 """
 
 from __future__ import annotations
@@ -24,6 +25,10 @@ def uses_pybullet(backend: str) -> bool:
     return backend == "pybullet"
 
 
+def uses_mujoco(backend: str) -> bool:
+    return backend == "mujoco"
+
+
 def draw_setup(setup: Setup, width: int, height: int, backend: str) -> np.ndarray:
     """A labelled picture of a setup at its start (see `cramlite show`)."""
     if uses_pybullet(backend):
@@ -32,6 +37,17 @@ def draw_setup(setup: Setup, width: int, height: int, backend: str) -> np.ndarra
 
         with World.from_setup(setup) as world:
             return render_labelled(world, width, height)
+    if uses_mujoco(backend):
+        from cramlite.backends.mujoco.render import render
+        from cramlite.backends.mujoco.world import MujocoWorld
+        from cramlite.render.labels import label_setup
+
+        view = camera(SHOW_CAMERA, SHOW_CAMERA)
+        with MujocoWorld(setup) as world:
+            image = render(world, width, height, view)
+            positions = {name: world.object_pose(name)[0] for name in world.item_qpos}
+        return label_setup(image, setup, positions,
+                           lambda points: view.project(points, width, height))
     from cramlite.render.labels import label_setup
     from cramlite.scene.scene import PlanningScene
 
@@ -59,6 +75,7 @@ class TraceFrames:
         self.trace = trace
         self.backend = backend
         self._world: Any = None
+        self._mujoco: Any = None  # (a MuJoCo world and its renderer)
         self._scene: Any = None
 
     def __enter__(self) -> TraceFrames:
@@ -66,6 +83,10 @@ class TraceFrames:
             from cramlite.backends.pybullet.replay import world_for
 
             self._world = world_for(self.trace)
+        elif uses_mujoco(self.backend):
+            from cramlite.backends.mujoco.replay import world_for as mujoco_world_for
+
+            self._mujoco = [mujoco_world_for(self.trace), None]
         else:
             from cramlite.scene.scene import PlanningScene
             from cramlite.trace.check import checker_for
@@ -77,6 +98,8 @@ class TraceFrames:
     def __exit__(self, *exc: Any) -> None:
         if self._world is not None:
             self._world.close()
+        if self._mujoco is not None and self._mujoco[1] is not None:
+            self._mujoco[1].close()
 
     def image(self, state: dict[str, Any], width: int, height: int,
               view: dict | None = None) -> np.ndarray:
@@ -86,6 +109,17 @@ class TraceFrames:
 
             apply_state(self._world, header["joints"], state, header["world_joints"])
             return render_frame(self._world, width, height)
+        if self._mujoco is not None:
+            from cramlite.backends.mujoco.render import Renderer
+            from cramlite.backends.mujoco.replay import apply_state as mujoco_apply
+
+            world, renderer = self._mujoco
+            if renderer is None or renderer.size != (width, height):
+                if renderer is not None:
+                    renderer.close()
+                renderer = self._mujoco[1] = Renderer(world, width, height)
+            mujoco_apply(world, header["joints"], state, header["world_joints"])
+            return renderer.image(camera(view or REPLAY_CAMERA, REPLAY_CAMERA))
         scene = self._scene
         belief = scene.belief
         belief.base = tuple(state["base"])
@@ -117,4 +151,4 @@ def save_image(image: np.ndarray, path: str | Path) -> Path:
 
 
 __all__ = ["REPLAY_CAMERA", "SHOW_CAMERA", "TraceFrames", "draw_setup", "save_image",
-           "scene_image", "uses_pybullet"]
+           "scene_image", "uses_mujoco", "uses_pybullet"]

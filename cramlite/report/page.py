@@ -68,6 +68,8 @@ class PageData:
     replays: dict[str, str] = field(default_factory=dict)  #: trial id -> file
     replay_notes: dict[str, str] = field(default_factory=dict)
     figures_note: str = ""  #: why there are no pictures ("" when there are)
+    #: The backends side by side (`cramlite.bench.agreement`; empty for one backend).
+    agreement: list[dict[str, Any]] = field(default_factory=list)
 
 
 def e(value: Any) -> str:
@@ -115,7 +117,9 @@ def render_page(data: PageData) -> str:
     links.append(("failures", "Failures"))
     parts.append("<nav>" + "".join(f'<a href="#{e(a)}">{e(t)}</a>' for a, t in links)
                  + "</nav>")
-    parts += [_run(folder), _summary(data), _tests(data), _plots(data)]
+    if data.agreement:
+        links.insert(2, ("backends", "Backends"))
+    parts += [_run(folder), _summary(data), _agreement(data), _tests(data), _plots(data)]
     parts += [_setup(data, s) for s in setups]
     parts += [_all_orders(data), _failures(data), "</body></html>\n"]
     return "\n".join(p for p in parts if p)
@@ -224,6 +228,40 @@ def _summary(data: PageData) -> str:
             "the straight legs robot → item → target. Edit distance: normalised "
             "Damerau-Levenshtein distance of the most frequent order to the setup's baseline "
             "order (0 = the same order, 1 = nothing in common).</p>")
+
+
+def _agreement(data: PageData) -> str:
+    """Where the backends of a bench disagree (orders, success, where items ended)."""
+    import math
+
+    from cramlite.bench.agreement import AGREEMENT_TOLERANCE_M
+
+    entries = data.agreement
+    if not entries:
+        return ""
+    pairs = sorted({x["backends"] for x in entries})
+    agree = sum(x["agree"] for x in entries)
+    gaps = [x["gap_m"] for x in entries if not math.isnan(x["gap_m"])]
+    head = (f'<h2 id="backends">Backends side by side</h2><p>'
+            f'{"; ".join(f"{e(a)} vs {e(b)}" for a, b in pairs)}: <b>{agree} of '
+            f"{len(entries)}</b> trials agree (the same order, the same success, every item "
+            f"within {AGREEMENT_TOLERANCE_M * 100:g} cm of where the other left it)"
+            + (f"; items at most {max(gaps) * 100:.2f} cm apart." if gaps else ".")
+            + "</p>")
+    differ = [x for x in entries if not x["agree"]]
+    if not differ:
+        return head
+    rows = "".join(
+        f"<tr class=bad><td>{e(x['setup'])}</td><td>{e(x['strategy'])}</td>"
+        f"<td class=n>{e(x['trial'])}</td><td>{e(x['backends'][0])} vs {e(x['backends'][1])}"
+        f"</td><td>{'same' if x['same_order'] else '<b>differs</b>'}</td>"
+        f"<td>{'same' if x['same_success'] else '<b>differs</b>'}</td><td class=n>"
+        + ("–" if math.isnan(x["gap_m"]) else
+           f"{x['gap_m'] * 100:.2f} cm ({e(x['worst_item'])})") + "</td></tr>"
+        for x in differ)
+    return (head + "<table><tr><th>setup</th><th>strategy</th><th>trial</th><th>backends"
+            "</th><th>order</th><th>success</th><th>largest item gap</th></tr>" + rows
+            + "</table>")
 
 
 def _tests(data: PageData) -> str:

@@ -1,0 +1,91 @@
+"""Backends side by side: the same trial run on several backends (`bench --backends A,B`),
+compared on what each one measures.
+
+The planner makes driving and arm times, so they agree by construction; what a simulator
+decides is where items end (settled, pushed) and so whether the trial succeeded, and from
+that the orders of the strategies that look at where items are. Each trial run on every
+backend is compared with the first backend's: the same order, the same success, and every
+item within `tolerance_m` of where the first backend left it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import defaultdict
+from collections.abc import Sequence
+from typing import Any
+
+#: Items further apart than this (m) between two backends' ends of a trial: they disagree.
+AGREEMENT_TOLERANCE_M = 0.01
+
+
+def _positions(row: dict[str, Any]) -> dict[str, list[float]]:
+    """Where each item ended (the `items` column: JSON text, or parsed by the report)."""
+    items = row.get("items") or {}
+    if isinstance(items, str):
+        try:
+            items = json.loads(items)
+        except ValueError:
+            return {}
+    if not isinstance(items, dict):
+        return {}
+    return {n: v["position"] for n, v in items.items()
+            if isinstance(v, dict) and isinstance(v.get("position"), list)}
+
+
+def backend_agreement(rows: Sequence[dict[str, Any]],
+                      tolerance_m: float = AGREEMENT_TOLERANCE_M) -> list[dict[str, Any]]:
+    """One entry per trial and other backend: the first backend (in the rows' order of
+    backends, sorted) against each other one. Empty when the rows are of one backend."""
+    trials: dict[tuple, dict[str, dict[str, Any]]] = defaultdict(dict)
+    for row in rows:
+        key = (row["setup"], row.get("strategy_name", row["strategy"]),
+               row.get("given_order", ""), str(row["trial"]))
+        trials[key][row.get("backend") or ""] = row
+    backends = sorted({b for by in trials.values() for b in by})
+    if len(backends) < 2:
+        return []
+    out = []
+    for (setup, strategy, _, trial), by in trials.items():
+        first = next((b for b in backends if b in by), None)
+        for other in (b for b in backends if b in by and b != first):
+            a, b = by[first], by[other]
+            pa, pb = _positions(a), _positions(b)
+            gaps = {n: math.dist(pa[n], pb[n]) for n in pa if n in pb}
+            worst = max(gaps, key=gaps.get, default="")
+            same_order = a.get("order", "") == b.get("order", "")
+            same_success = str(a.get("success")) == str(b.get("success"))
+            gap = gaps.get(worst, float("nan"))
+            out.append({"setup": setup, "strategy": strategy, "trial": trial,
+                        "backends": (first, other), "same_order": same_order,
+                        "same_success": same_success, "gap_m": gap, "worst_item": worst,
+                        "agree": same_order and same_success and bool(gaps)
+                        and gap <= tolerance_m})
+    return sorted(out, key=lambda x: (x["setup"], x["strategy"], int(x["trial"])
+                                      if x["trial"].isdigit() else 0))
+
+
+def agreement_markdown(entries: Sequence[dict[str, Any]]) -> list[str]:
+    """The summary's lines on the backends' agreement (none for one backend)."""
+    if not entries:
+        return []
+    pairs = sorted({e["backends"] for e in entries})
+    agree = sum(e["agree"] for e in entries)
+    gaps = [e["gap_m"] for e in entries if not math.isnan(e["gap_m"])]
+    lines = ["", "Backends side by side (" + "; ".join(f"{a} vs {b}" for a, b in pairs) +
+             f"): {agree} of {len(entries)} trials agree (same order, same success, every "
+             f"item within {AGREEMENT_TOLERANCE_M * 100:g} cm)"
+             + (f"; items at most {max(gaps) * 100:.2f} cm apart." if gaps else ".")]
+    differ = [e for e in entries if not e["agree"]]
+    if differ:
+        lines += ["", "| setup | strategy | trial | backends | order | success | "
+                  "largest item gap |", "|---|---|---|---|---|---|---|"]
+        for x in differ:
+            gap = "–" if math.isnan(x["gap_m"]) else f"{x['gap_m'] * 100:.2f} cm " \
+                                                     f"({x['worst_item']})"
+            lines.append(f"| {x['setup']} | {x['strategy']} | {x['trial']} | "
+                         f"{x['backends'][0]} vs {x['backends'][1]} | "
+                         f"{'same' if x['same_order'] else 'differs'} | "
+                         f"{'same' if x['same_success'] else 'differs'} | {gap} |")
+    return lines
