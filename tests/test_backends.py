@@ -67,8 +67,10 @@ def test_no_module_outside_the_simulators_backends_needs_their_simulator() -> No
 
 
 BLOCKED_RUN = r"""
-import sys
+import os, sys
 sys.modules["pybullet"] = None
+if os.environ.get("BLOCK_MUJOCO"):
+    sys.modules["mujoco"] = None
 from cramlite.cli import main
 code = main(sys.argv[1:])
 assert not any(m.startswith("cramlite.backends.pybullet") for m in sys.modules)
@@ -76,14 +78,19 @@ raise SystemExit(code)
 """
 
 
-def test_without_pybullet_run_uses_the_kinematic_backend_and_says_so(tmp_path: Path) -> None:
+def test_without_pybullet_run_uses_mujoco_else_kinematic_and_says_so(tmp_path: Path) -> None:
+    blocked = {**os.environ, "BLOCK_MUJOCO": "1"}
     trace = tmp_path / "v1.jsonl"
     result = subprocess.run([sys.executable, "-c", BLOCKED_RUN, "run", "v1", "--trace",
                              str(trace)], capture_output=True, text=True, cwd=ROOT,
-                            timeout=300)
+                            timeout=300, env=blocked)
     assert result.returncode == 0, result.stderr
     assert "on kinematic" in result.stdout
     assert json.loads(trace.read_text().splitlines()[0])["backend"] == "kinematic"
+    if importlib.util.find_spec("mujoco") is not None:  # no pybullet, but mujoco: mujoco
+        chosen = subprocess.run([sys.executable, "-c", BLOCKED_RUN, "run", "v1"],
+                                capture_output=True, text=True, cwd=ROOT, timeout=300)
+        assert chosen.returncode == 0 and "on mujoco: success" in chosen.stdout, chosen.stderr
     asked = subprocess.run([sys.executable, "-c", BLOCKED_RUN, "run", "v1", "--backend",
                             "pybullet"], capture_output=True, text=True, cwd=ROOT, timeout=300)
     assert asked.returncode == 2
