@@ -30,7 +30,8 @@ _EXPORTS = {
     "Repeat": "cramlite.designators", "Code": "cramlite.designators",
     "Retry": "cramlite.designators", "retry": "cramlite.designators",
     "Monitor": "cramlite.designators", "MonitorFired": "cramlite.designators",
-    "RobotState": "cramlite.designators",
+    "RobotState": "cramlite.designators", "LookAtAction": "cramlite.designators",
+    "SetGripperAction": "cramlite.designators", "PickAndPlaceAction": "cramlite.designators",
     "OpenAction": "cramlite.designators.storage", "CloseAction": "cramlite.designators.storage",
     "PlanReport": "cramlite.plans",
     # strategies

@@ -61,6 +61,9 @@ class TrialResult:
     actions: list[dict[str, Any]] = field(default_factory=list)
     #: The driven base path, [[x, y], ...] within 1 cm (see cramlite.trace.path).
     driven_path: list[list[float]] = field(default_factory=list)
+    #: Robot time during which two motions ran at once (the torso rising while driving):
+    #: robot_time_s = drive_s + arm_s - parallel_s.
+    parallel_s: float = 0.0
     #: Arm motions executed, and how many of them OMPL planned (straight path blocked).
     arm_motions: int = 0
     planned_arm_motions: int = 0
@@ -119,6 +122,7 @@ class TrialRunner:
                 report = plan_fn(ctx, self.setup, chooser)
             except PlanFailure as exc:  # (a user's plan may let one escape)
                 report = PlanReport(failures=[exc], success=False)
+            ctx.flush_deferred()  # (a motion the plan deferred to a drive that never came)
             wall_s = time.perf_counter() - start
         finally:
             if ctx.trace is not None:
@@ -139,7 +143,8 @@ class TrialRunner:
             backend=self.backend.name, items=items,
             open_close_s=round(time_in(actions, ("OpenAction", "CloseAction")), 6),
             actions=actions, driven_path=self._driven_path(ctx), arm_motions=ctx.arm_motions,
-            planned_arm_motions=ctx.planned_motions, log=ctx.log)
+            planned_arm_motions=ctx.planned_motions, log=ctx.log,
+            parallel_s=round(ctx.overlap_s, 6))
 
     def _driven_path(self, ctx: RobotContext) -> list[list[float]]:
         from cramlite.trace.path import simplify_path

@@ -67,7 +67,7 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
     remaining = [n for n in setup.baseline_order if n in goals]
     try:
         ParkArmsAction().perform(ctx)
-        MoveTorsoAction(TORSO_UP_M).perform(ctx)
+        MoveTorsoAction(TORSO_UP_M, while_driving=True).perform(ctx)  # (with the first drive)
     except PlanFailure as failure:  # stuck where it stands: nothing can be fetched
         ctx.note(f"failed: {failure}")
         report.failures.append(failure)

@@ -43,6 +43,23 @@ class ProcessModules(ABC):
         """Move the trajectory's joints (arm, torso, gripper) through its states; a
         trajectory with `world` values moves a drawer or door with the hand."""
 
+    def execute_parallel(self, base: BaseTrajectory, joints: JointTrajectory,
+                         on_state: StateObserver = None) -> None:
+        """Drive and move joints at once: `base` and `joints` share their times (state i of
+        one belongs with state i of the other; the planner checked them together). This
+        default steps the two primitives state by state; a robot's driver should send
+        both at once instead."""
+        import numpy as np
+
+        for i in range(len(base.times)):
+            t = base.times[i:i + 1]
+            self.execute_base_trajectory(BaseTrajectory(np.asarray(base.poses)[i:i + 1], t))
+            self.execute_joint_trajectory(JointTrajectory(
+                joints.names, np.asarray(joints.positions)[i:i + 1], t,
+                {k: np.asarray(v)[i:i + 1] for k, v in joints.world.items()}))
+            if on_state is not None:
+                on_state(i)
+
     @abstractmethod
     def attach(self, arm: str, obj: str) -> None:
         """The gripper holds the object: it moves with the gripper from now on."""
@@ -82,8 +99,8 @@ class ProcessModules(ABC):
 
 #: What a backend may be asked by the rest of cramlite: execution and observation. (A
 #: test records every call a trial makes and finds nothing else.)
-EXECUTION_CALLS = frozenset({"execute_base_trajectory", "execute_joint_trajectory", "attach",
-                             "detach", "settle", "release_all"})
+EXECUTION_CALLS = frozenset({"execute_base_trajectory", "execute_joint_trajectory",
+                             "execute_parallel", "attach", "detach", "settle", "release_all"})
 OBSERVATION_CALLS = frozenset({"base_pose", "joint_positions", "world_joint_positions",
                                "object_pose", "tool_pose"})
 

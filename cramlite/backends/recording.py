@@ -44,6 +44,19 @@ class RecordingModules(KinematicModules):
                                     for k, v in trajectory.world.items()}})
         super().execute_joint_trajectory(trajectory, on_state)
 
+    def execute_parallel(self, base: BaseTrajectory, joints: JointTrajectory,
+                         on_state: StateObserver = None) -> None:
+        """One command: the base and the joints at the same times (a driver sends both)."""
+        self.sent.append({"command": "parallel_trajectory", "joints": list(joints.names),
+                          "times": base.times.round(6).tolist(),
+                          "poses": base.poses.round(6).tolist(),
+                          "positions": joints.positions.round(6).tolist()})
+        sent, self.sent = self.sent, []  # (the steps below are this command's, not new ones)
+        try:
+            super().execute_parallel(base, joints, on_state)
+        finally:
+            self.sent = sent
+
     def attach(self, arm: str, obj: str) -> None:
         self.sent.append({"command": "attach", "arm": arm, "object": obj})
         super().attach(arm, obj)

@@ -141,9 +141,12 @@ def cmd_run(args: argparse.Namespace) -> int:
               + (f"; tried and failed: {', '.join(missed)}" if missed else ""))
         print(f"  driven base path {result.base_path_m:.2f} m, straight-line legs "
               f"{result.straight_line_m:.2f} m")
+        together = (f", {result.parallel_s:.2f} s of them at once"
+                    if result.parallel_s else "")
         print(f"  robot time {result.robot_time_s:.2f} s (driving {result.drive_s:.2f} s, arm "
-              f"{result.arm_s:.2f} s; {result.planned_arm_motions} of {result.arm_motions} "
-              f"arm motions planned around obstacles); computing {result.wall_s:.2f} s")
+              f"{result.arm_s:.2f} s{together}; {result.planned_arm_motions} of "
+              f"{result.arm_motions} arm motions planned around obstacles); computing "
+              f"{result.wall_s:.2f} s")
         if result.open_close_s:
             print(f"  opening and closing drawers and doors took {result.open_close_s:.2f} s of "
                   "that")

@@ -6,8 +6,10 @@ from cramlite.designators.actions import (
     MoveTorsoAction,
     NavigateAction,
     ParkArmsAction,
+    PickAndPlaceAction,
     PickUpAction,
     PlaceAction,
+    SetGripperAction,
     TransportAction,
 )
 from cramlite.designators.context import ExecutionOptions, RobotContext, simulated_robot
@@ -22,6 +24,7 @@ from cramlite.designators.failures import (
     PlacementFailed,
     PlanFailure,
 )
+from cramlite.designators.head import LookAtAction
 from cramlite.designators.language import (
     Code,
     Monitor,
@@ -56,5 +59,6 @@ __all__ = [
     "PickUpAction", "PlaceAction", "PlacementFailed", "PlacingLocation", "PlanFailure",
     "ProcessModules", "ReachablePose", "RobotContext", "Sequential",
     "TransportAction", "TryInOrder", "simulated_robot", "Code", "Monitor", "MonitorFired",
-    "Parallel", "Repeat", "Retry", "RobotState", "TryAll", "retry",
+    "Parallel", "Repeat", "Retry", "RobotState", "TryAll", "retry", "LookAtAction",
+    "SetGripperAction", "PickAndPlaceAction",
 ]

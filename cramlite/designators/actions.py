@@ -71,6 +71,9 @@ class ParkArmsAction(ActionDesignator):
     of the robot, above the counters)."""
 
     arm: str = "both"  #: "left", "right" or "both"
+    #: Park while the base drives next (one combined motion, checked as one; alone first
+    #: where the combination collides or no drive comes next).
+    while_driving: bool = False
 
     def execute(self, ctx: RobotContext) -> None:
         for arm in ARMS if self.arm == "both" else (self.arm,):
@@ -85,7 +88,7 @@ class ParkArmsAction(ActionDesignator):
                 target = carry or target
             now = ctx.scene.joint_positions(list(target))
             if any(abs(wrap_angle(now[n] - v)) > PARKED_TOLERANCE_RAD for n, v in target.items()):
-                MoveArmJointsMotion(dict(target)).perform(ctx)
+                MoveArmJointsMotion(dict(target), while_driving=self.while_driving).perform(ctx)
 
 
 def _tool_at(ctx: RobotContext, arm: str, joints: dict[str, float],
@@ -100,10 +103,14 @@ def _tool_at(ctx: RobotContext, arm: str, joints: dict[str, float],
 
 @dataclass
 class MoveTorsoAction(ActionDesignator):
+    """Raise or lower the torso; `while_driving`: while the base drives next (one
+    combined motion, checked as one; alone first where the combination collides)."""
+
     height_m: float  #: torso lift in metres (0 to 0.31 on the PR2)
+    while_driving: bool = False
 
     def execute(self, ctx: RobotContext) -> None:
-        MoveTorsoMotion(self.height_m).perform(ctx)
+        MoveTorsoMotion(self.height_m, self.while_driving).perform(ctx)
 
     def validate(self, ctx: RobotContext, result: object = None) -> None:
         torso = ctx.scene.joint_positions([TORSO_JOINT])[TORSO_JOINT]
@@ -184,7 +191,7 @@ class PickUpAction(ActionDesignator):
             relative=relative_pose(_se3(tool), (bx, by, bz), orientation))
         try:
             MoveArmJointsMotion(reach.post_joints).perform(ctx)  # lift
-            ParkArmsAction(reach.arm).perform(ctx)
+            ParkArmsAction(reach.arm, while_driving=True).perform(ctx)  # (on the way)
         except PlanFailure:
             self._put_down_again(ctx, reach, obj.name)
             raise
@@ -249,7 +256,7 @@ class PlaceAction(ActionDesignator):
         ctx.settle([obj.name])
         ctx.record_state()
         MoveArmJointsMotion(reach.post_joints, touch).perform(ctx)  # retreat
-        ParkArmsAction(arm).perform(ctx)
+        ParkArmsAction(arm, while_driving=True).perform(ctx)  # (on the way to the next)
         return obj.pose(ctx)[0]  # (where it came to rest)
 
     def validate(self, ctx: RobotContext, result: object = None) -> None:
@@ -649,3 +656,55 @@ def _part_outline(ctx: RobotContext, links: list[int]) -> dict[float, np.ndarray
 
 #: Outlines of the arms (and torso and head) kept for the process, at most 5 000.
 _OUTLINES: ProcessCache[dict[float, np.ndarray]] = ProcessCache(5_000)
+
+
+@dataclass
+class SetGripperAction(ActionDesignator):
+    """Open or close an empty gripper (its fingers along a checked, timed trajectory). A
+    gripper holding something is refused: letting go is PlaceAction's (where it lands is
+    checked there)."""
+
+    arm: str  #: "left" or "right"
+    state: str  #: "open" or "close"
+
+    def execute(self, ctx: RobotContext) -> None:
+        if self.arm not in ARMS or self.state not in ("open", "close"):
+            raise ValueError(f"SetGripperAction: expected arm in {ARMS} and state 'open' or "
+                             f"'close', got {self.arm!r} and {self.state!r}")
+        holding = ctx.holding.get(self.arm)
+        if holding is not None:
+            raise GraspFailed(f"the {self.arm} gripper holds {holding.obj}: put it down with "
+                              "PlaceAction", obj=holding.obj)
+        MoveGripperMotion(self.arm, self.state).perform(ctx)
+
+    def validate(self, ctx: RobotContext, result: object = None) -> None:
+        from cramlite.designators.motions import gripper_joints
+
+        wanted = gripper_joints(self.arm, self.state)
+        now = ctx.scene.joint_positions(list(wanted))
+        off = max(abs(now[n] - v) for n, v in wanted.items())
+        if off > 0.01:
+            raise MotionPlanningFailed(f"the {self.arm} gripper ended {off:.3f} rad from "
+                                       f"{self.state}")
+
+
+@dataclass
+class PickAndPlaceAction(ActionDesignator):
+    """Pick an object up and put it at `target` from where the robot stands (no driving:
+    TransportAction drives); returns where it came to rest."""
+
+    object: ObjectDesignator | ObjectDesignatorDescription | str
+    target: tuple[float, float, float]
+    arms: Sequence[str] = ARMS
+
+    def execute(self, ctx: RobotContext) -> object:
+        obj = as_object(self.object, ctx)
+        PickUpAction(obj, arms=list(self.arms)).perform(ctx)
+        return PlaceAction(obj, self.target).perform(ctx)
+
+    def validate(self, ctx: RobotContext, result: object = None) -> None:
+        obj = as_object(self.object, ctx)
+        (x, y, _), _ = ctx.scene.object_pose(obj.name)
+        off = math.dist((x, y), self.target[:2])
+        if obj.name in ctx.scene.held or off > ctx.options.place_tolerance_m:
+            raise PlacementFailed(f"it ended {off * 100:.1f} cm from the target", obj=obj.name)

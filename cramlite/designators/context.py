@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -42,11 +42,12 @@ from cramlite.scene.transforms import Quat, Vec3
 from cramlite.trace.format import TraceWriter
 from cramlite.world.setup import Setup
 
-#: The joints a trace records (what cramlite moves), in this order: the torso, both arms,
-#: and every finger joint of both grippers (six each, moving together: the mimic tags).
-TRACE_JOINT_PREFIXES = ("torso_lift_joint", "r_shoulder", "r_upper_arm", "r_elbow", "r_forearm",
-                        "r_wrist", "r_gripper", "l_shoulder", "l_upper_arm", "l_elbow",
-                        "l_forearm", "l_wrist", "l_gripper")
+#: The joints a trace records (what cramlite moves): the torso, the head, both arms, and
+#: every finger joint of both grippers (six each, moving together: the mimic tags).
+TRACE_JOINT_PREFIXES = ("torso_lift_joint", "head_pan_joint", "head_tilt_joint", "r_shoulder",
+                        "r_upper_arm", "r_elbow", "r_forearm", "r_wrist", "r_gripper",
+                        "l_shoulder", "l_upper_arm", "l_elbow", "l_forearm", "l_wrist",
+                        "l_gripper")
 
 
 @dataclass(frozen=True)
@@ -75,6 +76,10 @@ class ExecutionOptions:
     #: Leave containers opened to fetch or store an item open until the plan ends (the
     #: plan closes them then); by default each is closed as soon as the item is out (in).
     keep_containers_open: bool = False
+    #: Run motions on disjoint joint groups at once where a plan asks for it and the
+    #: combined states are free (the torso rising while the base drives); off: one after
+    #: the other, as before.
+    parallel_motion: bool = True
 
     @property
     def base_limits(self) -> BaseLimits:
@@ -146,6 +151,66 @@ def scene_collisions(scene: PlanningScene) -> SceneCollisions:
     return scene.cache["collision"]
 
 
+def _group(names: Sequence[str]) -> str:
+    arms = sorted({n[0] for n in names if n[:2] in ("l_", "r_")})
+    parts = [{"l": "left arm", "r": "right arm"}[a] for a in arms]
+    parts += [n for n in names if n[:2] not in ("l_", "r_")]
+    return " and ".join(parts)
+
+
+#: The combined states of a parallel motion are checked at least this often (s): 2 cm of
+#: driving at full speed.
+CHECK_STEP_S = 0.02
+
+
+def _dense(base: BaseTrajectory, joints: JointTrajectory) -> tuple[np.ndarray, np.ndarray]:
+    """Base poses and joint states of a combined motion every CHECK_STEP_S (and at its
+    own states), interpolated linearly as execution moves between states."""
+    times = np.asarray(base.times, dtype=float)
+    grid = np.union1d(times, np.arange(0.0, times[-1], CHECK_STEP_S))
+    poses = np.asarray(base.poses, dtype=float).copy()
+    poses[:, 2] = np.unwrap(poses[:, 2])
+    positions = np.asarray(joints.positions, dtype=float)
+    dense_poses = np.column_stack([np.interp(grid, times, poses[:, k]) for k in range(3)])
+    dense_q = np.column_stack([np.interp(grid, times, positions[:, k])
+                               for k in range(positions.shape[1])])
+    return dense_poses, dense_q
+
+
+def _combined(base: BaseTrajectory, joints: JointTrajectory, start_s: float,
+              ) -> tuple[BaseTrajectory, JointTrajectory, float]:
+    """A drive starting `start_s` after a joint motion, both sampled at the same times:
+    the joints' before the drive and after it, the drive's own during it (each holding
+    its first state before it starts and its last after it ends)."""
+    base_times = np.asarray(base.times, dtype=float) + start_s
+    joint_times = np.asarray(joints.times, dtype=float)
+    times = np.concatenate([joint_times[joint_times < start_s], base_times,
+                            joint_times[joint_times > base_times[-1]]])
+    poses = np.asarray(base.poses, dtype=float)
+    before = int(np.sum(joint_times < start_s))
+    after = len(times) - before - len(base_times)
+    combined_poses = np.concatenate([np.repeat(poses[:1], before, axis=0), poses,
+                                     np.repeat(poses[-1:], after, axis=0)])
+    positions = np.asarray(joints.positions, dtype=float)
+    q = np.column_stack([np.interp(times, joint_times, positions[:, k])
+                         for k in range(positions.shape[1])])
+    return (BaseTrajectory(combined_poses, times),
+            JointTrajectory(tuple(joints.names), q, times), start_s)
+
+
+@dataclass
+class Deferred:
+    """A joint motion waiting for the next drive, and the task nodes (its motion and
+    action) whose robot-time span is when it really runs."""
+
+    trajectory: JointTrajectory
+    nodes: list[Any]
+
+    def span(self, start_s: float, end_s: float) -> None:
+        for node in self.nodes:
+            node.start_s, node.end_s = start_s, end_s
+
+
 @dataclass
 class RobotContext:
     """Everything designators resolve against (the planning scene) and motions execute
@@ -166,6 +231,10 @@ class RobotContext:
     trace: TraceWriter | None = None
     #: The xy positions of every executed base trajectory, in order (the driven path).
     driven_xy: list[np.ndarray] = field(default_factory=list)
+    #: Robot time during which two motions ran at once (counted once in `time_s`).
+    overlap_s: float = 0.0
+    #: Joint motions planned to run while the base drives next (`defer_to_next_drive`).
+    deferred: list[Deferred] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self.checker = FootprintChecker(occupancy_map(self.scene))
@@ -203,8 +272,9 @@ class RobotContext:
 
     @property
     def time_s(self) -> float:
-        """Robot time since the plan started: driving plus arm motion."""
-        return self.drive_s + self.arm_s
+        """Robot time since the plan started: driving plus arm motion, the time of motions
+        that ran at once counted once."""
+        return self.drive_s + self.arm_s - self.overlap_s
 
     def note(self, text: str) -> None:
         self.log.append(text)
@@ -214,8 +284,11 @@ class RobotContext:
                 for name, held in self.scene.held.items()]
 
     def observe(self) -> None:
-        """Update the planning scene from what the process modules report."""
+        """Update the planning scene from what the process modules report (a joint motion
+        deferred to the next drive is believed done: what is planned next plans with it)."""
         self.scene.observe(self.modules)
+        for d in self.deferred:
+            self.scene.belief.joints.update(d.trajectory.final())
 
     def settle(self, objects: list[str]) -> None:
         """Let released objects come to rest (physics, where the backend has it), then
@@ -225,6 +298,10 @@ class RobotContext:
 
     # -- executing trajectories ---------------------------------------------------------
     def drive(self, trajectory: BaseTrajectory) -> None:
+        if self.deferred:
+            if not self.monitors and self._drive_in_parallel(trajectory):
+                return
+            self.flush_deferred()
         t0 = self.time_s
         fired = None
         if self.monitors:
@@ -240,6 +317,10 @@ class RobotContext:
             raise fired
 
     def move_joints(self, trajectory: JointTrajectory) -> None:
+        self.flush_deferred()  # (a deferred motion runs first, where it was planned)
+        self._execute_joints(trajectory)
+
+    def _execute_joints(self, trajectory: JointTrajectory) -> None:
         t0 = self.time_s
         fired = None
         if self.monitors:
@@ -254,6 +335,71 @@ class RobotContext:
             self.refresh_maps()
         if fired is not None:
             raise fired
+
+    # -- parallel motion ----------------------------------------------------------------
+    def defer_to_next_drive(self, trajectory: JointTrajectory) -> None:
+        """Run a planned joint motion (the torso's) while the base drives next: believed
+        done from now, executed with the next drive if the two are free together at every
+        combined state, else alone before whatever moves next (where it was planned and
+        checked: nothing has moved since). Without `parallel_motion`, or while monitors
+        watch, it runs now."""
+        if not self.options.parallel_motion or self.monitors or trajectory.world \
+                or not len(trajectory.positions):
+            self.move_joints(trajectory)
+            return
+        self.flush_deferred()  # (one at a time)
+        now = self.time_s
+        nodes = [n for n in self.tasks.open_nodes() if n.start_s == now]
+        self.deferred.append(Deferred(trajectory, nodes))
+        self.scene.belief.joints.update(trajectory.final())
+        self.footprint_stale = True
+
+    def flush_deferred(self) -> None:
+        """Execute deferred joint motions now, one after the other."""
+        while self.deferred:
+            d = self.deferred.pop(0)
+            t0 = self.time_s
+            self._execute_joints(d.trajectory)
+            d.span(t0, t0 + d.trajectory.duration_s)
+
+    def _drive_in_parallel(self, trajectory: BaseTrajectory) -> bool:
+        """Drive with the deferred motion at once if the combined states are free: the
+        drive starting with the joint motion, or a quarter, a half or three quarters of
+        it later (an arm first swinging clear of the counter it reached over); sampled at
+        the joints' times before and after the drive and at the drive's own times during
+        it (resampling a timed base path would bend it), checked together, sent together.
+        False (nothing done) if no start is free."""
+        (d,) = self.deferred[:1] if len(self.deferred) == 1 else (None,)
+        if d is None or not len(trajectory.poses):
+            return False
+        joints = d.trajectory
+        # against the kitchen and the items (the joint path is the one planned and checked
+        # against the robot itself, which does not depend on where the base is), at the
+        # sent states and between them every CHECK_STEP_S
+        check = self.collisions.check(list(joints.names), self_collision=False)
+        for delay in (0.0, 0.25, 0.5, 0.75):
+            combined = _combined(trajectory, joints, delay * joints.duration_s)
+            if check.states_free_along(*_dense(*combined[:2])):
+                break
+        else:
+            self.note(f"{_group(joints.names)} not moved while driving: every combined "
+                      "motion collides")
+            return False
+        self.deferred.clear()
+        t0 = self.time_s
+        combined_base, combined_joints, start = combined
+        self.modules.execute_parallel(combined_base, combined_joints,
+                                      self._observer(t0, combined_base.times,
+                                                     ["base", *joints.names]))
+        self.observe()
+        self.base_path_m += trajectory.length_m
+        self.driven_xy.append(np.asarray(trajectory.poses)[:, :2].copy())
+        self.drive_s += trajectory.duration_s
+        self.arm_s += joints.duration_s
+        self.overlap_s += max(0.0, min(joints.duration_s - start, trajectory.duration_s))
+        self.footprint_stale = True
+        d.span(t0, t0 + joints.duration_s)
+        return True
 
     # -- monitors -----------------------------------------------------------------------
     def _latched(self):
@@ -308,12 +454,12 @@ class RobotContext:
             update_carried(self)
         return self.checker
 
-    def _observer(self, t0: float, times: np.ndarray):
+    def _observer(self, t0: float, times: np.ndarray, parallel: list[str] | None = None):
         if self.trace is None:
             return None
-        return lambda i: self.record_state(t0 + float(times[i]))
+        return lambda i: self.record_state(t0 + float(times[i]), parallel)
 
-    def record_state(self, t: float | None = None) -> None:
+    def record_state(self, t: float | None = None, parallel: list[str] | None = None) -> None:
         """Write the robot's and the objects' current state to the trace (if any)."""
         if self.trace is None:
             return
@@ -327,7 +473,7 @@ class RobotContext:
                                [joints[n] for n in self.trace_joints],
                                [world_joints[n] for n in self.scene.kitchen.joints],
                                {h.obj: arm for arm, h in self.holding.items()}, objects,
-                               self.tasks.current_action())
+                               self.tasks.current_action(), parallel)
 
     def trace_header(self, setup: str, plan: str, strategy: str, seed: int,
                      backend: str = "") -> dict[str, Any]:
@@ -379,6 +525,7 @@ def simulated_robot(setup: Setup | Backend | Any, seed: int | np.random.Generato
                            options=options or ExecutionOptions())
         ctx.observe()
         yield ctx
+        ctx.flush_deferred()  # (a motion deferred to a drive that never came)
     finally:
         if owned:
             world.close()

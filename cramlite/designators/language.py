@@ -117,8 +117,9 @@ class TryAll:
 
 @dataclass
 class Parallel:
-    """All steps (one after another until combined motions exist); every one runs, and
-    the first failure escapes afterwards."""
+    """All steps, one after another; every one runs, and the first failure escapes
+    afterwards. (Motions at once: `while_driving=True` on MoveTorsoAction, ParkArmsAction
+    and MoveArmJointsMotion runs the motion with the next drive, checked as one.)"""
 
     steps: Iterable[Step]
 

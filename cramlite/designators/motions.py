@@ -39,9 +39,10 @@ GRIPPER_OPEN, GRIPPER_CLOSED = 0.548, 0.0
 
 
 def move_joints(ctx: RobotContext, joints: dict[str, float], allow_contact: Sequence[str] = (),
-                ) -> None:
+                while_driving: bool = False) -> None:
     """Plan, time and execute a joint motion to `joints` (only the joints that change move);
-    raises MotionPlanningFailed if no collision-free path is found."""
+    raises MotionPlanningFailed if no collision-free path is found. `while_driving`: run it
+    with the next drive (`RobotContext.defer_to_next_drive`)."""
     names = list(joints)
     current = ctx.scene.joint_positions(names)
     start = np.array([current[n] for n in names])
@@ -69,7 +70,11 @@ def move_joints(ctx: RobotContext, joints: dict[str, float], allow_contact: Sequ
     if path is None:
         raise MotionPlanningFailed(f"no collision-free path for {_joint_group(names)}{why}")
     ctx.planned_motions += path.planned
-    ctx.move_joints(time_joint_path(names, path.vertices, ctx.limits))
+    timed = time_joint_path(names, path.vertices, ctx.limits)
+    if while_driving:
+        ctx.defer_to_next_drive(timed)
+    else:
+        ctx.move_joints(timed)
 
 
 #: The tool's steps along an upright-keeping path (IK at each), and its speed there.
@@ -203,10 +208,12 @@ class MoveArmJointsMotion:
     joints: dict[str, float]
     #: Objects the motion may touch (the one being grasped or just put down).
     allow_contact: tuple[str, ...] = ()
+    #: Move while the base drives next, where that is free (see `move_joints`).
+    while_driving: bool = False
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
-        move_joints(ctx, self.joints, self.allow_contact)
+        move_joints(ctx, self.joints, self.allow_contact, self.while_driving)
 
 
 @dataclass(frozen=True)
@@ -233,10 +240,12 @@ class MoveTCPMotion:
 @dataclass(frozen=True)
 class MoveTorsoMotion:
     height_m: float
+    #: Rise (or sink) while the base drives next, where that is free (see `move_joints`).
+    while_driving: bool = False
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
-        move_joints(ctx, {"torso_lift_joint": self.height_m})
+        move_joints(ctx, {"torso_lift_joint": self.height_m}, while_driving=self.while_driving)
 
 
 def gripper_joints(arm: str, state: str, closed_at: float | None = None) -> dict[str, float]:

@@ -62,6 +62,10 @@ class TaskTree:
             node.end_s = self.clock()
             self._stack.pop()
 
+    def open_nodes(self) -> list[TaskNode]:
+        """The nodes in progress, outermost first."""
+        return list(self._stack)
+
     def current_action(self) -> tuple[str, str | None] | None:
         """The innermost action in progress and the object it (or an enclosing action)
         manipulates."""

@@ -535,12 +535,31 @@ class MotionCheck:
         self.checks += len(states)
         if not len(states) or not len(self.parts):
             return True
-        frames = self._link_frames(states)
+        return self._frames_free(self._link_frames(states), order)
+
+    def states_free_along(self, bases: np.ndarray, states: np.ndarray) -> bool:
+        """`states_free` with the base at its own pose (x, y, yaw) in each state: a drive
+        and a joint motion at once, checked as one."""
+        states = np.asarray(states, dtype=float).reshape(-1, len(self.joints))
+        self.checks += len(states)
+        if not len(states) or not len(self.parts):
+            return True
+        saved = self.base_matrix
+        self.base_matrix = np.eye(4)
+        try:
+            local = self._link_frames(states)  # (in the base's frame)
+        finally:
+            self.base_matrix = saved
+        worlds = np.stack([planar(*pose) for pose in np.asarray(bases, dtype=float)])
+        return self._frames_free(worlds[:, None] @ local, None)
+
+    def _frames_free(self, frames: np.ndarray, order: Sequence[int] | None) -> bool:
+        """The broadphase and exact checks of `states_free` on the links' world frames."""
         if not self._kept_upright(frames):
             return False
         near, meets, boxes = self._near(frames)
         flagged = set(np.flatnonzero(near.any(axis=(1, 2)) | meets.any(axis=1)).tolist())
-        for i in (order if order is not None else range(len(states))):
+        for i in (order if order is not None else range(len(frames))):
             if i in flagged and not self._state_free(frames[i], near[i], meets[i], 0.0,
                                                      tuple(b[i] for b in boxes)):
                 return False

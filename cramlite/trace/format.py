@@ -90,13 +90,18 @@ class TraceWriter:
     def write_state(self, t: float, base: Sequence[float], q: Sequence[float],
                     w: Sequence[float], held: dict[str, str],
                     objects: dict[str, Sequence[float]],
-                    action: tuple[str, str | None] | None) -> None:
-        self._write({
+                    action: tuple[str, str | None] | None,
+                    parallel: Sequence[str] | None = None) -> None:
+        """One state; `parallel`: what moved at once into it ("base" and joint names)."""
+        record = {
             "t": round(t, DIGITS), "base": [round(v, DIGITS) for v in base],
             "q": [round(v, DIGITS) for v in q], "w": [round(v, DIGITS) for v in w],
             "held": dict(held),
             "objects": {n: [round(v, DIGITS) for v in pose] for n, pose in objects.items()},
-            "action": None if action is None else {"name": action[0], "object": action[1]}})
+            "action": None if action is None else {"name": action[0], "object": action[1]}}
+        if parallel:
+            record["parallel"] = list(parallel)
+        self._write(record)
         self.states += 1
         self.last_t = t
 

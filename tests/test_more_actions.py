@@ -1,0 +1,67 @@
+"""The actions users asked for beyond fetch and place: LookAtAction points the head (a
+checked, timed motion, traced), SetGripperAction opens and closes an empty gripper, and
+PickAndPlaceAction picks up and puts down from where the robot stands."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from cramlite.designators import (
+    GraspFailed,
+    LookAtAction,
+    MotionPlanningFailed,
+    NavigateAction,
+    ParkArmsAction,
+    PickAndPlaceAction,
+    SetGripperAction,
+    simulated_robot,
+)
+from cramlite.designators.head import PAN, TILT, gaze_error_deg
+from cramlite.designators.motions import gripper_joints
+from cramlite.world.setup import load_setup
+
+
+def test_look_at_points_the_head_at_an_item_and_a_point_and_refuses_its_chin(
+        tmp_path: Path) -> None:
+    with simulated_robot(load_setup("v1"), backend="kinematic") as ctx:
+        ctx.open_trace(tmp_path / "look.jsonl", "v1", "look", "none", 0, "kinematic")
+        ParkArmsAction().perform(ctx)
+        before = ctx.time_s
+        point = LookAtAction("cup").perform(ctx)
+        head = ctx.modules.joint_positions([PAN, TILT])
+        assert gaze_error_deg(ctx, point) < 0.1 and head[PAN] < -0.3  # (the cup: right)
+        assert ctx.time_s > before  # (a timed motion, not a jump)
+        LookAtAction((-0.85, 1.75, 0.9)).perform(ctx)
+        assert ctx.modules.joint_positions([PAN])[PAN] > 0
+        with pytest.raises(MotionPlanningFailed, match="head_tilt_joint"):
+            LookAtAction((-0.5, -1.6, 0.0)).perform(ctx)  # straight down: below its chin
+        ctx.trace.close()
+    lines = [json.loads(x) for x in (tmp_path / "look.jsonl").read_text().splitlines()]
+    joints = lines[0]["joints"]
+    pans = {round(s["q"][joints.index(PAN)], 3) for s in lines[1:]}
+    assert len(pans) > 10  # the head turned through many traced states
+
+
+def test_set_gripper_opens_and_closes_an_empty_gripper_and_refuses_a_full_one() -> None:
+    with simulated_robot(load_setup("v1"), backend="kinematic", seed=3) as ctx:
+        SetGripperAction("left", "open").perform(ctx)
+        wanted = gripper_joints("left", "open")
+        now = ctx.modules.joint_positions(list(wanted))
+        assert all(abs(now[n] - v) < 1e-6 for n, v in wanted.items())
+        SetGripperAction("left", "close").perform(ctx)
+        closed = gripper_joints("left", "close")
+        now = ctx.modules.joint_positions(list(closed))
+        assert all(abs(now[n] - v) < 1e-6 for n, v in closed.items())
+        ParkArmsAction().perform(ctx)
+        NavigateAction((0.85, 0.35 + 0.188, 0.0)).perform(ctx)  # in front of the spoon
+        where = PickAndPlaceAction("spoon", (1.45, 0.2, 0.85), arms=["right"]).perform(ctx)
+        assert where == pytest.approx((1.45, 0.2, 0.85), abs=0.01)
+        assert not ctx.holding and ctx.base_path_m > 2.0
+        from cramlite.designators import PickUpAction
+
+        PickUpAction("spoon", arms=["right"]).perform(ctx)
+        with pytest.raises(GraspFailed, match="holds spoon"):
+            SetGripperAction("right", "open").perform(ctx)

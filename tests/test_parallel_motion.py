@@ -1,0 +1,120 @@
+"""Parallel motion: the torso rises and the arms park while the base drives, as one
+combined motion checked as one; a combination that collides is refused (the motions run
+one after the other); the robot's time counts overlapping motions once."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cramlite.designators.context import ExecutionOptions
+from cramlite.trace import read_trace
+from cramlite.trial import TrialRunner
+from tests.conftest import run_cli
+
+TORSO = "torso_lift_joint"
+
+
+def _node(actions: list[dict], name: str) -> dict:
+    return next(a for a in actions if a["name"] == name)
+
+
+def _walk(nodes: list[dict]):
+    for node in nodes:
+        yield node
+        yield from _walk(node["children"])
+
+
+def test_the_torso_rises_while_the_base_drives_and_the_time_counts_once(tmp_path) -> None:
+    trace = tmp_path / "v1.jsonl"
+    with TrialRunner("v1", backend="kinematic") as runner:
+        together = runner.run("opm", seed=0, trace=trace)
+    with TrialRunner("v1", backend="kinematic",
+                     options=ExecutionOptions(parallel_motion=False)) as runner:
+        apart = runner.run("opm", seed=0)
+    assert together.success and apart.success and together.order == apart.order
+    assert apart.parallel_s == 0.0
+    assert together.parallel_s > 5.0
+    assert together.robot_time_s == pytest.approx(
+        together.drive_s + together.arm_s - together.parallel_s, abs=1e-5)
+    assert together.robot_time_s < apart.robot_time_s - 5.0
+    # the task tree: the torso's action spans the first drive (they overlap)
+    torso = _node(together.actions, "MoveTorsoAction")
+    drive = next(n for n in _walk(together.actions) if n["name"] == "NavigateAction")
+    assert torso["start_s"] == pytest.approx(drive["start_s"])
+    assert torso["end_s"] - torso["start_s"] > 0.25 / 0.0131  # (its whole rise, 19 s)
+    assert torso["end_s"] >= drive["end_s"] > torso["start_s"]  # (one combined motion)
+    # the trace: states where both the base and the torso moved into them, marked so
+    recorded = read_trace(trace)
+    joints = recorded.header["joints"]
+    both = 0
+    for before, state in zip(recorded.states, recorded.states[1:], strict=False):
+        if "parallel" not in state:
+            continue
+        assert "base" in state["parallel"]
+        moved_base = not np.allclose(before["base"], state["base"])
+        moved_torso = before["q"][joints.index(TORSO)] != state["q"][joints.index(TORSO)]
+        both += moved_base and moved_torso
+    assert both > 10
+    # checked independently: nothing inside anything, accelerations within the limits
+    checked = run_cli("replay", str(trace), "--check")
+    assert checked.returncode == 0, checked.stdout + checked.stderr
+    assert "nothing found" in checked.stdout
+
+
+def test_a_combined_motion_that_collides_is_refused_and_runs_one_after_the_other(
+        tmp_path: Path) -> None:
+    """The right arm reaching down and forward while the base drives up to the counter:
+    the arm ends inside the counter in every combined motion, so none is sent; the arm
+    moves first, alone (where it was planned), then the base drives."""
+    from cramlite.backends import load_backend
+    from cramlite.designators.context import RobotContext
+    from cramlite.designators.motions import move_joints
+    from cramlite.motion.base_timing import time_base_path
+    from cramlite.motion.trajectory import BaseTrajectory
+    from cramlite.scene.scene import PlanningScene
+    from cramlite.world.setup import load_setup
+
+    setup = load_setup("v1")
+    with load_backend("recording", setup) as backend:
+        scene = PlanningScene(setup)
+        ctx = RobotContext(scene=scene, modules=backend.modules, rng=np.random.default_rng(0))
+        from cramlite.world.pr2 import PARK_JOINTS
+
+        move_joints(ctx, PARK_JOINTS["left"])  # (at the start, then put before the counter)
+        move_joints(ctx, PARK_JOINTS["right"])
+        move_joints(ctx, {TORSO: 0.25})
+        backend.modules.execute_base_trajectory(BaseTrajectory(
+            np.array([[0.0, 0.35, 0.0]]), np.zeros(1)))
+        ctx.observe()
+        reach = {"r_shoulder_pan_joint": 0.0, "r_shoulder_lift_joint": 0.5,
+                 "r_upper_arm_roll_joint": 0.0, "r_elbow_flex_joint": -0.15,
+                 "r_forearm_roll_joint": 0.0, "r_wrist_flex_joint": -0.1,
+                 "r_wrist_roll_joint": 0.0}
+        move_joints(ctx, reach, while_driving=True)
+        assert len(ctx.deferred) == 1 and ctx.scene.joint_positions(["r_shoulder_lift_joint"])[
+            "r_shoulder_lift_joint"] == pytest.approx(0.5)  # (believed: planning goes on)
+        timed = time_base_path([(0.0, 0.35, 0.0), (0.85, 0.35, 0.0)])
+        sent_before = len(backend.sent)
+        ctx.drive(BaseTrajectory(timed.poses, timed.times))
+        commands = [c["command"] for c in backend.sent[sent_before:]]
+        assert commands == ["joint_trajectory", "base_trajectory"]  # one after the other
+        assert ctx.overlap_s == 0.0 and not ctx.deferred
+        assert any("not moved while driving" in line for line in ctx.log)
+        # the same arm motion with a drive away from the counter: sent as one
+        backend.modules.execute_base_trajectory(BaseTrajectory(
+            np.array([[0.0, 0.35, 0.0]]), np.zeros(1)))
+        ctx.observe()
+        move_joints(ctx, PARK_JOINTS["right"])
+        move_joints(ctx, reach, while_driving=True)
+        back = time_base_path([(0.0, 0.35, 0.0), (-0.3, 0.35, 0.0)])
+        sent_before = len(backend.sent)
+        ctx.drive(BaseTrajectory(back.poses, back.times))
+        commands = [c["command"] for c in backend.sent[sent_before:]]
+        assert commands == ["parallel_trajectory"] and ctx.overlap_s > 0.5
+        sent = backend.sent[-1]
+        assert json.dumps(sent)  # (what a driver would be sent: plain JSON)
+        assert len(sent["times"]) == len(sent["poses"]) == len(sent["positions"])
