@@ -1,5 +1,6 @@
-"""Fetch two: the two items the strategy picks first go to their targets, then the robot
-looks into drawer_1 (opens it and closes it again). A plan written with designators.
+"""Fetch two: the robot looks at each of the two items the strategy picks first and takes
+it to its target, then looks into drawer_1 (opens it, looks in, closes it again). A plan
+written with designators.
 
     cramlite run c1 --plan ./examples/fetch_two.py:fetch_two
     cramlite bench --plan ./examples/fetch_two.py:fetch_two --setups v1,c1 --trials 2
@@ -18,6 +19,7 @@ from cramlite.plans.set_table import item_candidate, robot_position
 
 from cramlite import (
     CloseAction,
+    LookAtAction,
     MoveTorsoAction,
     OpenAction,
     ParkArmsAction,
@@ -50,6 +52,7 @@ def fetch_two(ctx: RobotContext, setup: Setup, strategy: Strategy) -> PlanReport
         report.order.append(chosen.name)
         target = targets[chosen.name]
         try:
+            LookAtAction(chosen.name).perform(ctx)  # (the head turns to it first)
             TransportAction(chosen.name, target=target.xyz, target_yaw=target.yaw).perform(ctx)
         except PlanFailure as failure:  # recorded; the plan goes on with the next item
             report.failures.append(failure)
@@ -57,6 +60,9 @@ def fetch_two(ctx: RobotContext, setup: Setup, strategy: Strategy) -> PlanReport
         CloseAction(name).perform(ctx)
     if "drawer_1" in ctx.scene.containers:
         OpenAction("drawer_1").perform(ctx)
+        inside = ctx.scene.containers["drawer_1"]
+        (x, y, z), _ = ctx.scene.link_frame(inside.inside_link)
+        LookAtAction((x, y, z)).perform(ctx)  # into the open drawer
         CloseAction("drawer_1").perform(ctx)
     ParkArmsAction().perform(ctx)
     # success: both items stand at their targets and every container is closed again
