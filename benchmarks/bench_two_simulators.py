@@ -6,7 +6,8 @@ MuJoCo backend's time broken down (loading, physics steps, offscreen frames).
 
 Prints, per trial: both orders and success, the largest gap between where the two left an
 item (the agreement asked for: < 1 cm), the largest distance of an item from its target in
-each, wall_s on kinematic, pybullet and mujoco; then the breakdown and the verdict.
+each, wall_s on kinematic, pybullet and mujoco, the deepest contact each simulator saw while
+items settled; then the breakdown and the verdict.
 """
 
 from __future__ import annotations
@@ -73,7 +74,9 @@ def main() -> None:
               f"success {py.success}/{mj.success}, items within {gap * 100:.2f} cm of each "
               f"other, off target at most {off['pybullet'] * 100:.2f} / {off['mujoco'] * 100:.2f}"
               f" cm; wall_s kinematic {kin.wall_s:.2f}, pybullet {py.wall_s:.2f}, mujoco "
-              f"{mj.wall_s:.2f} (load {loaded:.2f} s, {steps} physics steps)")
+              f"{mj.wall_s:.2f} (load {loaded:.2f} s, {steps} physics steps); deepest "
+              f"contact while settling {py.simulator.get('deepest_contact_m', 0) * 1000:.2f}"
+              f" / {mj.simulator.get('deepest_contact_m', 0) * 1000:.2f} mm")
     print(f"mujoco wall_s / kinematic wall_s: median {statistics.median(ratios):.2f}, "
           f"max {max(ratios):.2f}")
     print(f"MuJoCo offscreen frame (400 x 300): {_frame_ms(setups[0]):.1f} ms")

@@ -64,6 +64,9 @@ class TrialResult:
     #: Robot time during which two motions ran at once (the torso rising while driving):
     #: robot_time_s = drive_s + arm_s - parallel_s.
     parallel_s: float = 0.0
+    #: What the backend's physics measured (`ProcessModules.simulator_report`: physics
+    #: steps, the deepest contact while items settled); empty without physics.
+    simulator: dict[str, float] = field(default_factory=dict)
     #: Arm motions executed, and how many of them OMPL planned (straight path blocked).
     arm_motions: int = 0
     planned_arm_motions: int = 0
@@ -144,7 +147,7 @@ class TrialRunner:
             open_close_s=round(time_in(actions, ("OpenAction", "CloseAction")), 6),
             actions=actions, driven_path=self._driven_path(ctx), arm_motions=ctx.arm_motions,
             planned_arm_motions=ctx.planned_motions, log=ctx.log,
-            parallel_s=round(ctx.overlap_s, 6))
+            parallel_s=round(ctx.overlap_s, 6), simulator=self.modules.simulator_report())
 
     def _driven_path(self, ctx: RobotContext) -> list[list[float]]:
         from cramlite.trace.path import simplify_path

@@ -140,6 +140,8 @@ def test_two_simulators_agree_on_orders_success_and_where_items_settle(setup: st
     for py, mj in zip(results["pybullet"], results["mujoco"], strict=True):
         assert py.success and mj.success, (py.failures, mj.failures)
         assert mj.backend == "mujoco" and py.order == mj.order
+        for report in (py.simulator, mj.simulator):  # (what each simulator measured)
+            assert report["physics_steps"] > 0 and 0 < report["deepest_contact_m"] < 0.005
         for name, item in mj.items.items():
             assert item["ok"] and py.items[name]["ok"], (name, item, py.items[name])
             gap = np.linalg.norm(np.subtract(item["position"], py.items[name]["position"]))

@@ -96,13 +96,18 @@ class ProcessModules(ABC):
     def release_all(self) -> None:
         """Let go of everything (a new trial starts with empty hands)."""
 
+    def simulator_report(self) -> dict[str, float]:
+        """What a physics simulator measured since the trial started (none here): the
+        physics steps it took and the deepest contact it saw while items settled (m)."""
+        return {}
+
 
 #: What a backend may be asked by the rest of cramlite: execution and observation. (A
 #: test records every call a trial makes and finds nothing else.)
 EXECUTION_CALLS = frozenset({"execute_base_trajectory", "execute_joint_trajectory",
                              "execute_parallel", "attach", "detach", "settle", "release_all"})
 OBSERVATION_CALLS = frozenset({"base_pose", "joint_positions", "world_joint_positions",
-                               "object_pose", "tool_pose"})
+                               "object_pose", "tool_pose", "simulator_report"})
 
 
 class Backend(ABC):

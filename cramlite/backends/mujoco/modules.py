@@ -113,6 +113,10 @@ class MujocoModules(ProcessModules):
         w.forward()
         self._carry()
 
+    def simulator_report(self) -> dict[str, float]:
+        return {"physics_steps": self.steps,
+                "deepest_contact_m": round(self.deepest_contact_m, 6)}
+
     def base_pose(self) -> BasePose:
         return self.world.base_pose()
 

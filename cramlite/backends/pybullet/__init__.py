@@ -31,6 +31,7 @@ class PyBulletBackend(Backend):
 
     def reset(self, poses: dict[str, Pose] | None = None) -> None:
         self.modules.release_all()
+        self.modules.steps, self.modules.deepest_contact_m = 0, 0.0  # (counted per trial)
         self.world.restore(self._initial)
         for name, (position, orientation) in (poses or {}).items():
             self.world.objects[name].set_pose(position, orientation)

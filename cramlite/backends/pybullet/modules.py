@@ -30,6 +30,9 @@ class SimulatedProcessModules(ProcessModules):
         self.robot = world.robot
         self.client = world.client
         self._attached: dict[str, tuple[str, tuple[Vec3, Quat], float]] = {}
+        #: Physics steps taken, and the deepest item contact seen while settling (m).
+        self.steps = 0
+        self.deepest_contact_m = 0.0
         for link in range(-1, p.getNumJoints(self.robot.body, physicsClientId=self.client)):
             # the robot moves kinematically; physics steps (settling) must not push it or items
             p.setCollisionFilterGroupMask(self.robot.body, link, 0, 0,
@@ -98,15 +101,23 @@ class SimulatedProcessModules(ProcessModules):
             for _ in range(chunk):
                 p.stepSimulation(physicsClientId=self.client)
             done += chunk
+            for body in bodies:  # (contact distance < 0: penetration)
+                for point in p.getContactPoints(bodyA=body, physicsClientId=self.client):
+                    self.deepest_contact_m = max(self.deepest_contact_m, -point[8])
             resting = resting + 1 if bodies and all(_at_rest(b, self.client)
                                                     for b in bodies) else 0
             if resting >= 2:  # at rest over two checks, not at the top of a bounce
                 break
+        self.steps += done
         self.robot.set_joint_positions(joints)  # undo any sag of the unactuated joints
         for name, value in drawers.items():  # and any give of the drawers and doors
             p.resetJointState(self.world.environment, self.world.world_joints[name], value,
                               physicsClientId=self.client)
         self._carry()
+
+    def simulator_report(self) -> dict[str, float]:
+        return {"physics_steps": self.steps,
+                "deepest_contact_m": round(self.deepest_contact_m, 6)}
 
     def base_pose(self) -> BasePose:
         return self.robot.base_pose()
