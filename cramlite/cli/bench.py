@@ -55,10 +55,21 @@ def _backends(args: argparse.Namespace) -> list[str]:
 
     if args.backend and args.backends_list:
         raise UserInputError("give --backend or --backends, not both", field="--backends")
-    names = comma_list(args.backends_list) if args.backends_list else [args.backend]
+    if args.backends_list is not None:
+        names = [part.strip() for part in args.backends_list.split(",")]
+        if not any(names) or not all(names):
+            raise UserInputError(f"expected backend names separated by commas, got "
+                                 f"{args.backends_list!r}", field="--backends")
+    else:
+        names = [args.backend]
     out = []
     for name in names:
-        backend = chosen_backend(name)
+        try:
+            backend = chosen_backend(name)
+        except UserInputError as exc:
+            if args.backends_list is None:
+                raise
+            raise UserInputError(exc.detail, field="--backends") from None
         if backend in out:
             raise UserInputError(f"{backend!r} is listed twice; expected each backend once",
                                  field="--backends")

@@ -196,7 +196,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                           description="Loads and checks a setup (every mistake is reported as "
                                       "FILE: FIELD: what was expected, exit code 2) and draws "
                                       "it headless (PyBullet's TinyRenderer for the pybullet "
-                                      "backend, cramlite's own renderer for the others): "
+                                      "backend, MuJoCo's offscreen renderer for mujoco, "
+                                      "cramlite's own renderer for the others): "
                                       "each item labelled, each target marked (red square) "
                                       "and the robot's start (blue ring). --top draws the "
                                       "kitchen from above instead (matplotlib).")

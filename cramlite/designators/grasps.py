@@ -125,6 +125,14 @@ def item_grasps(model: ItemModel) -> list[Grasp]:
     if not out:
         ex, ey, ez = model.extents
         opening = gripper_geometry().max_gap
+        if _fits(min(ex, ey)):  # (narrow enough: the kinds it allows do not suit its shape)
+            raise SetupError(
+                f"item type {model.type!r} has no grasp the PR2 gripper can make: it is "
+                f"narrow enough ({ex * 100:.1f} x {ey * 100:.1f} cm, height {ez * 100:.1f} "
+                f"cm, the gripper fits {(opening - 2 * CLEARANCE_M) * 100:.1f} cm), but "
+                f"none of the grasps its item file allows ({', '.join(model.kind.grasps)}) "
+                "suits its shape; expected a grasps list that does (see docs/manipulation.md)",
+                source=str(model.kind.source or model.urdf), field="grasps")
         raise SetupError(
             f"item type {model.type!r} has no grasp the PR2 gripper can make: its widths are "
             f"{ex * 100:.1f} x {ey * 100:.1f} cm (height {ez * 100:.1f} cm) and it allows "

@@ -15,17 +15,30 @@ from cramlite.errors import UserInputError
 # backend runs, and a picture says in one line what is missing).
 if "MUJOCO_GL" not in os.environ:
     os.environ["MUJOCO_GL"] = "egl" if ctypes.util.find_library("EGL") else "disable"
+#: Why MuJoCo could not be imported with the OpenGL platform asked for ("" if it could):
+#: it is imported again without one (the backend runs; a picture says this in one line).
+GL_IMPORT_ERROR = ""
 try:
     import mujoco  # noqa: F401  (every module of this package imports it after this)
 except Exception as exc:  # a MUJOCO_GL it cannot use makes the import itself fail
-    raise UserInputError(f"MuJoCo could not be imported with MUJOCO_GL="
-                         f"{os.environ.get('MUJOCO_GL')!r} ({type(exc).__name__}: {exc}); "
-                         "expected egl (libEGL), osmesa (libOSMesa) or glfw (a display)",
-                         field="MUJOCO_GL") from None
+    import sys
 
-from cramlite.backends.base import Backend
-from cramlite.scene.transforms import Pose
-from cramlite.world.setup import Setup
+    GL_IMPORT_ERROR = f"{type(exc).__name__}: {exc}"
+    asked = os.environ["MUJOCO_GL"]
+    for name in [m for m in sys.modules if m.split(".")[0] in ("mujoco", "OpenGL")]:
+        del sys.modules[name]
+    os.environ["MUJOCO_GL"] = "disable"
+    try:
+        import mujoco  # noqa: F401
+    except Exception as again:
+        raise UserInputError(f"MuJoCo could not be imported ({type(again).__name__}: "
+                             f"{again})", field="--backend") from None
+    finally:
+        os.environ["MUJOCO_GL"] = asked  # (what the user set, as messages name it)
+
+from cramlite.backends.base import Backend  # noqa: E402  (after MUJOCO_GL is settled)
+from cramlite.scene.transforms import Pose  # noqa: E402
+from cramlite.world.setup import Setup  # noqa: E402
 
 
 class MujocoBackend(Backend):

@@ -23,6 +23,17 @@ GL_HELP = ("MuJoCo's offscreen renderer needs EGL or OSMesa: on Debian or Ubuntu
            "package (pip install 'cramlite[mujoco]')")
 
 
+def gl_help() -> str:
+    """What to do, for the OpenGL platform asked for (MUJOCO_GL)."""
+    asked = os.environ.get("MUJOCO_GL", "")
+    if asked == "glfw" and not os.environ.get("DISPLAY"):
+        return "glfw needs a display and DISPLAY is not set: unset MUJOCO_GL (EGL) instead"
+    if asked == "osmesa":
+        return ("OSMesa needs libOSMesa: on Debian or Ubuntu `apt install libosmesa6`, or "
+                "unset MUJOCO_GL (EGL)")
+    return GL_HELP
+
+
 class GLUnavailable(UserInputError):
     """No OpenGL context could be made for offscreen rendering."""
 
@@ -31,21 +42,27 @@ class Renderer:
     """An offscreen renderer of one world (its GL context lives as long as this)."""
 
     def __init__(self, world: MujocoWorld, width: int, height: int):
-        if width > MAX_IMAGE[0] or height > MAX_IMAGE[1]:
-            raise UserInputError(f"a MuJoCo picture is at most {MAX_IMAGE[0]} x "
-                                 f"{MAX_IMAGE[1]} pixels, got {width} x {height}",
-                                 field="--size")
+        import warnings
+
         import mujoco
+
+        from cramlite.backends.mujoco import GL_IMPORT_ERROR
 
         self.world = world
         self.size = (width, height)
+        # (the offscreen buffer is made as large as the model says: this picture's size)
+        visual = world.model.vis.global_
+        visual.offwidth, visual.offheight = max(width, MAX_IMAGE[0]), max(height, MAX_IMAGE[1])
         try:
-            self._renderer = mujoco.Renderer(world.model, height, width)
+            with warnings.catch_warnings():  # (glfw warns before it fails: said below)
+                warnings.simplefilter("ignore")
+                self._renderer = mujoco.Renderer(world.model, height, width)
         except Exception as exc:  # (ImportError, RuntimeError, a GL error: all say the same)
+            reason = GL_IMPORT_ERROR or (f"{type(exc).__name__}: "
+                                         f"{str(exc).splitlines()[0] if str(exc) else ''}")
             raise GLUnavailable(f"cannot render with MuJoCo (MUJOCO_GL="
-                                f"{os.environ.get('MUJOCO_GL')}: {type(exc).__name__}: "
-                                f"{str(exc).splitlines()[0] if str(exc) else ''}); "
-                                f"{GL_HELP}") from None
+                                f"{os.environ.get('MUJOCO_GL')}: {reason}); "
+                                f"{gl_help()}") from None
         self._camera = mujoco.MjvCamera()
         self._options = mujoco.MjvOption()
         self._options.geomgroup[:] = 0
