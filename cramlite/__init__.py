@@ -31,6 +31,7 @@ _EXPORTS = {
     "Retry": "cramlite.designators", "retry": "cramlite.designators",
     "Monitor": "cramlite.designators", "MonitorFired": "cramlite.designators",
     "RobotState": "cramlite.designators", "LookAtAction": "cramlite.designators",
+    "DetectAction": "cramlite.designators",
     "SetGripperAction": "cramlite.designators", "PickAndPlaceAction": "cramlite.designators",
     "OpenAction": "cramlite.designators.storage", "CloseAction": "cramlite.designators.storage",
     "PlanReport": "cramlite.plans",

@@ -1,6 +1,6 @@
 """Fetch two: the robot looks at each of the two items the strategy picks first and takes
-it to its target, then looks into drawer_1 (opens it, looks in, closes it again). A plan
-written with designators.
+it to its target, then looks into drawer_1 (opens it, looks in, notes what it detects,
+closes it again). A plan written with designators.
 
     cramlite run c1 --plan ./examples/fetch_two.py:fetch_two
     cramlite bench --plan ./examples/fetch_two.py:fetch_two --setups v1,c1 --trials 2
@@ -19,6 +19,7 @@ from cramlite.plans.set_table import item_candidate, robot_position
 
 from cramlite import (
     CloseAction,
+    DetectAction,
     LookAtAction,
     MoveTorsoAction,
     OpenAction,
@@ -63,6 +64,8 @@ def fetch_two(ctx: RobotContext, setup: Setup, strategy: Strategy) -> PlanReport
         inside = ctx.scene.containers["drawer_1"]
         (x, y, z), _ = ctx.scene.link_frame(inside.inside_link)
         LookAtAction((x, y, z)).perform(ctx)  # into the open drawer
+        seen = DetectAction().perform(ctx)  # what the camera sees there and around
+        ctx.note(f"seen in and around drawer_1: {', '.join(sorted(seen)) or 'nothing'}")
         CloseAction("drawer_1").perform(ctx)
     ParkArmsAction().perform(ctx)
     # success: both items stand at their targets and every container is closed again

@@ -65,3 +65,25 @@ def test_set_gripper_opens_and_closes_an_empty_gripper_and_refuses_a_full_one() 
         PickUpAction("spoon", arms=["right"]).perform(ctx)
         with pytest.raises(GraspFailed, match="holds spoon"):
             SetGripperAction("right", "open").perform(ctx)
+
+
+def test_detect_does_not_see_the_cup_behind_the_cupboard_door_and_sees_it_open() -> None:
+    from cramlite.designators import DetectAction, MoveTorsoAction, ObjectNotFound
+
+    with simulated_robot(load_setup("c1"), backend="kinematic") as ctx:
+        ParkArmsAction().perform(ctx)
+        MoveTorsoAction(0.25).perform(ctx)
+        ctx.modules.state.belief.base = (0.5, 1.75, 0.0)  # (put before the cupboard)
+        ctx.observe()
+        LookAtAction("cup").perform(ctx)
+        assert "cup" not in DetectAction().perform(ctx)  # the closed door hides it
+        with pytest.raises(ObjectNotFound, match="cup"):
+            DetectAction("cup").perform(ctx)
+        ctx.modules.state.belief.world_joints["cupboard_door_joint"] = 2.3  # swung open
+        ctx.observe()
+        seen = DetectAction("cup").perform(ctx)
+        assert seen["cup"] == ctx.scene.object_pose("cup")
+        noisy = [DetectAction(noise_m=0.01, seed=5).perform(ctx)["cup"][0] for _ in range(2)]
+        assert noisy[0] == noisy[1] != seen["cup"][0]  # (seeded: the same noise again)
+        LookAtAction((-0.85, 1.2, 0.9)).perform(ctx)  # the island, behind the robot's left
+        assert "cup" not in DetectAction().perform(ctx)  # (out of view)

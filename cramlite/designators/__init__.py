@@ -48,6 +48,7 @@ from cramlite.designators.motions import (
     MoveTorsoMotion,
 )
 from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription
+from cramlite.designators.perception import DetectAction
 
 __all__ = [
     "AttachMotion", "CostmapLocation", "DetachMotion", "ExecutionOptions", "GraspFailed",
@@ -60,5 +61,5 @@ __all__ = [
     "ProcessModules", "ReachablePose", "RobotContext", "Sequential",
     "TransportAction", "TryInOrder", "simulated_robot", "Code", "Monitor", "MonitorFired",
     "Parallel", "Repeat", "Retry", "RobotState", "TryAll", "retry", "LookAtAction",
-    "SetGripperAction", "PickAndPlaceAction",
+    "SetGripperAction", "PickAndPlaceAction", "DetectAction",
 ]
