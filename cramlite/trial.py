@@ -67,6 +67,9 @@ class TrialResult:
     #: What the backend's physics measured (`ProcessModules.simulator_report`: physics
     #: steps, the deepest contact while items settled); empty without physics.
     simulator: dict[str, float] = field(default_factory=dict)
+    #: Failures injected into the trial, by kind (`--inject`; see
+    #: cramlite.designators.injection).
+    injected: dict[str, int] = field(default_factory=dict)
     #: Arm motions executed, and how many of them OMPL planned (straight path blocked).
     arm_motions: int = 0
     planned_arm_motions: int = 0
@@ -104,17 +107,26 @@ class TrialRunner:
 
     def run(self, strategy: str = "baseline", plan: str = "set-table", seed: int = 0,
             params: dict[str, float] | None = None, dims: str = "xy",
-            order: list[str] | None = None, trace: str | Path | None = None) -> TrialResult:
+            order: list[str] | None = None, trace: str | Path | None = None,
+            inject: dict[str, float] | None = None) -> TrialResult:
         """One trial; `order` replaces the setup's baseline order (for `baseline`);
-        `trace`: write every executed state to this file (format cramlite-trace/2)."""
+        `trace`: write every executed state to this file (format cramlite-trace/2);
+        `inject`: failure probabilities by kind (cramlite.designators.injection)."""
         plan_fn = plan_function(plan)  # (UserInputError naming --plan if there is none)
         self.backend.reset(self._targets() if plan == "clear-table" else None)
         self.scene.reset()
         chooser = make_strategy(strategy, params=params, dims=dims,
                                 rng=np.random.default_rng([seed, 1]),
                                 order=list(order or self.setup.baseline_order))
-        ctx = RobotContext(scene=self.scene, modules=self.modules,
-                           rng=np.random.default_rng([seed, 0]), options=self.options)
+        modules, injector = self.modules, None
+        if inject:
+            from cramlite.designators.injection import InjectingModules, Injector
+
+            injector = Injector(inject, seed)
+            modules = InjectingModules(self.modules, injector)
+        ctx = RobotContext(scene=self.scene, modules=modules,
+                           rng=np.random.default_rng([seed, 0]), options=self.options,
+                           injector=injector)
         ctx.observe()  # (the scene's first belief: what the process modules report)
         if trace is not None:
             ctx.open_trace(trace, self.setup_reference(), plan, strategy, seed,
@@ -147,7 +159,8 @@ class TrialRunner:
             open_close_s=round(time_in(actions, ("OpenAction", "CloseAction")), 6),
             actions=actions, driven_path=self._driven_path(ctx), arm_motions=ctx.arm_motions,
             planned_arm_motions=ctx.planned_motions, log=ctx.log,
-            parallel_s=round(ctx.overlap_s, 6), simulator=self.modules.simulator_report())
+            parallel_s=round(ctx.overlap_s, 6), simulator=self.modules.simulator_report(),
+            injected=dict(injector.injected) if injector is not None else {})
 
     def _driven_path(self, ctx: RobotContext) -> list[list[float]]:
         from cramlite.trace.path import simplify_path

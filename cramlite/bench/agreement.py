@@ -89,3 +89,49 @@ def agreement_markdown(entries: Sequence[dict[str, Any]]) -> list[str]:
                          f"{'same' if x['same_order'] else 'differs'} | "
                          f"{'same' if x['same_success'] else 'differs'} | {gap} |")
     return lines
+
+
+def injection_counts(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Per strategy (label), over the trials with failures injected (`--inject`): the
+    failures drawn by kind, the trials, those that still succeeded (recovered), and the
+    items finally lost (not where they belong at the end)."""
+    out: dict[str, dict[str, Any]] = {}
+    for row in rows:
+        if not row.get("inject"):
+            continue
+        drawn = row.get("injected") or {}
+        if isinstance(drawn, str):
+            try:
+                drawn = json.loads(drawn)
+            except ValueError:
+                drawn = {}
+        entry = out.setdefault(row["strategy"], {"strategy": row["strategy"],
+                                                 "inject": row["inject"], "trials": 0,
+                                                 "with_failures": 0, "recovered": 0,
+                                                 "lost": 0, "drawn": {}})
+        entry["trials"] += 1
+        if drawn:
+            entry["with_failures"] += 1
+            entry["recovered"] += str(row.get("success")) == "True"
+        for kind, n in drawn.items():
+            entry["drawn"][kind] = entry["drawn"].get(kind, 0) + int(n)
+        items = row.get("items") or {}
+        if isinstance(items, str):
+            try:
+                items = json.loads(items)
+            except ValueError:
+                items = {}
+        entry["lost"] += sum(1 for v in items.values() if isinstance(v, dict)
+                             and v.get("ok") is False)
+    return sorted(out.values(), key=lambda e: e["strategy"])
+
+
+def injection_markdown(entries: Sequence[dict[str, Any]]) -> list[str]:
+    """The summary's lines on injected failures (none without `--inject`)."""
+    lines = []
+    for e in entries:
+        drawn = ", ".join(f"{k} {n}" for k, n in sorted(e["drawn"].items())) or "none drawn"
+        lines.append(f"- {e['strategy']} ({e['inject']}): {e['trials']} trials, failures "
+                     f"injected: {drawn}; {e['recovered']} of the {e['with_failures']} trials "
+                     f"with failures still set everything in place; {e['lost']} items lost")
+    return ["", "Injected failures (--inject):", *lines] if lines else []

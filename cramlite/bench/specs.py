@@ -59,13 +59,15 @@ class TrialSpec:
     #: The folder the bench ran in: a plan or strategy file named relative to it loads
     #: from there in any worker (see `cramlite.plugins.absolute_reference`).
     cwd: str = ""
+    #: Failures injected (`--inject`, canonical: cramlite.designators.injection); "" none.
+    inject: str = ""
 
     @property
     def key(self) -> tuple[str, ...]:
         """Identity of a trial in a results file (used to resume)."""
         return (self.setup, self.setup_hash, self.plan, self.strategy, self.code_hash,
                 " ".join(self.given_order), self.backend, str(self.trial),
-                str(self.batch_seed))
+                str(self.batch_seed), self.inject)
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -98,6 +100,8 @@ class BatchPlan:
 
     #: The folder relative names of plan and strategy files are resolved against.
     cwd: str = ""
+    #: Failures injected into every trial (canonical `--inject` text; "" none).
+    inject: str = ""
 
     def code_hash(self, strategy: str) -> str:
         return (self.code_hashes or {}).get(strategy, "")
@@ -123,7 +127,7 @@ class BatchPlan:
                         yield TrialSpec(name, entry.path, strategy, trial, seed,
                                         self.batch_seed, self.plan, (), entry.content_hash,
                                         self._trace(name, strategy, trial, backend), backend,
-                                        self.code_hash(strategy), self.cwd)
+                                        self.code_hash(strategy), self.cwd, self.inject)
             if self.all_orders:
                 for index, order in enumerate(itertools.permutations(entry.items)):
                     for backend in self.backends:
@@ -132,13 +136,15 @@ class BatchPlan:
                                         self.batch_seed, self.plan, tuple(order),
                                         entry.content_hash,
                                         self._trace(name, FIXED_ORDER, index, backend),
-                                        backend, self.code_hash(FIXED_ORDER), self.cwd)
+                                        backend, self.code_hash(FIXED_ORDER), self.cwd,
+                                        self.inject)
 
     def contains(self, key: Sequence[str]) -> bool:
         """Whether a results row's key (see `TrialSpec.key`) is one of this batch's trials."""
-        setup, setup_hash, plan, strategy, code, given, backend, trial, batch_seed = key
+        setup, setup_hash, plan, strategy, code, given, backend, trial, batch_seed, inject = key
         entry = self.setups.get(setup)
         if entry is None or entry.content_hash != setup_hash or plan != self.plan \
+                or inject != self.inject \
                 or code != self.code_hash(strategy) \
                 or batch_seed != str(self.batch_seed) or not trial.isdigit() \
                 or backend not in self.backends:

@@ -27,19 +27,20 @@ from pathlib import Path
 from typing import Any
 
 COLUMNS = ["setup", "setup_hash", "plan", "strategy", "code_hash", "given_order", "backend",
-           "trial",
-           "seed", "batch_seed", "success", "order", "failures", "failure_types",
+           "inject", "trial",
+           "seed", "batch_seed", "success", "order", "failures", "failure_types", "injected",
            "base_path_m", "straight_line_m", "wall_s", "drive_s", "arm_s", "open_close_s",
            "robot_time_s", "task_time_s", "items", "actions", "driven_path", "error_type",
            "error", "worker"]
 #: Columns that measure the host's time or place, and so differ between identical runs.
 TIMING_COLUMNS = ("wall_s", "task_time_s", "worker")
 KEY_COLUMNS = ("setup", "setup_hash", "plan", "strategy", "code_hash", "given_order",
-               "backend", "trial", "batch_seed")
+               "backend", "trial", "batch_seed", "inject")
 #: What the columns mean (DEFINITIONS: robot_time_s is the robot's own time from 2 on; in
 #: 1 it was wall + driving + arm time; 3 adds code_hash, the hash of a plan file and of a
-#: learned strategy's model file). A folder of another format is not resumed into.
-RESULTS_FORMAT = 3
+#: learned strategy's model file; 4 adds inject, the failures injected (a key column), and
+#: injected, how many were drawn by kind). A folder of another format is not resumed into.
+RESULTS_FORMAT = 4
 #: Rows are synced to disk at most this often (seconds); each is written whole anyway.
 SYNC_INTERVAL_S = 1.0
 
@@ -85,8 +86,8 @@ class TrialStore:
         if found != RESULTS_FORMAT:
             raise StoreMismatch(f"{self.folder} holds results of format {found} (written by "
                                 "an earlier cramlite: format 1's robot_time_s included the "
-                                "wall time, format 2 had no code_hash); this cramlite writes "
-                                f"format {RESULTS_FORMAT}; "
+                                "wall time, format 2 had no code_hash, format 3 no "
+                                f"inject); this cramlite writes format {RESULTS_FORMAT}; "
                                 "expected a new --out folder (`cramlite report` still shows "
                                 "the old one)")
         with self.path.open(newline="") as handle:

@@ -150,7 +150,8 @@ def order_percentiles(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[str, Any]],
                   percentiles: list[dict[str, Any]],
-                  agreement: Sequence[dict[str, Any]] = ()) -> str:
+                  agreement: Sequence[dict[str, Any]] = (),
+                  injection: Sequence[dict[str, Any]] = ()) -> str:
     """summary.csv and summary.md; returns the Markdown (also printed). `agreement`: the
     backends side by side (`cramlite.bench.agreement`), when the bench ran on several."""
     if summary:
@@ -188,9 +189,10 @@ def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[
                  "wall: the host's time to plan and execute it. open/close: the part of the "
                  "robot time spent opening and closing drawers and doors. Times and lengths "
                  "are of the successful trials (–: none succeeded).")
-    from cramlite.bench.agreement import agreement_markdown
+    from cramlite.bench.agreement import agreement_markdown, injection_markdown
 
     lines += agreement_markdown(agreement)
+    lines += injection_markdown(injection)
     for test in tests:
         lines += ["", f"Wilcoxon signed-rank, {test['strategy']} vs {test['reference']} "
                       f"({test['pairs']} pairs by setup and trial):"]

@@ -97,8 +97,11 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
                              f"(hash {trial_code_hash(plan, strategy) or 'none'}, expected "
                              f"{spec.code_hash})")
             return row
+        from cramlite.designators.injection import parse_inject
+
         result = runner.run(strategy, plan, spec.seed,
-                            order=list(spec.given_order) or None, trace=spec.trace or None)
+                            order=list(spec.given_order) or None, trace=spec.trace or None,
+                            inject=parse_inject(spec.inject))
     except (Exception, SystemExit, KeyboardInterrupt) as exc:  # recorded, the batch goes on
         if isinstance(exc, KeyboardInterrupt) and not _interrupts_are_code():
             raise  # (a real Ctrl-C to a process that takes it: stop)
@@ -111,6 +114,7 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
     row.update(success=result.success, order=" ".join(result.order),
                failures=json.dumps(result.failures),
                failure_types=" ".join(f["type"] for f in result.failures),
+               injected=json.dumps(result.injected, sort_keys=True),
                base_path_m=result.base_path_m, straight_line_m=result.straight_line_m,
                wall_s=result.wall_s, drive_s=result.drive_s, arm_s=result.arm_s,
                open_close_s=result.open_close_s, robot_time_s=result.robot_time_s,
@@ -133,7 +137,7 @@ def base_row(spec: TrialSpec) -> dict[str, Any]:
     return {"setup": spec.setup, "setup_hash": spec.setup_hash, "plan": spec.plan,
             "strategy": spec.strategy, "code_hash": spec.code_hash,
             "given_order": " ".join(spec.given_order),
-            "backend": spec.backend,
+            "backend": spec.backend, "inject": spec.inject, "injected": "{}",
             "trial": spec.trial, "seed": spec.seed, "batch_seed": spec.batch_seed,
             "success": False, "order": "", "failures": "[]", "failure_types": "",
             "base_path_m": "", "straight_line_m": "", "wall_s": "", "drive_s": "", "arm_s": "",

@@ -9,6 +9,7 @@ from cramlite.cli.common import (
     BACKEND_HELP,
     EXIT_OK,
     EXIT_PLAN_FAILED,
+    INJECT_HELP,
     comma_list,
     command_help,
     int_in_range,
@@ -152,8 +153,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
             raise UserInputError("the dask executor needs Dask: pip install 'cramlite[dask]'",
                                  field="--executor") from None
     from cramlite.bench.summary import default_reference
+    from cramlite.designators.injection import inject_text, parse_inject
     from cramlite.plan_registry import plan_function
 
+    args.inject_text = inject_text(parse_inject(args.inject))  # (checked; the key's spelling)
     strategies = _strategies(args.strategies)
     if args.reference and args.reference not in strategies:
         raise UserInputError(f"{args.reference!r} is not one of the strategies run "
@@ -217,7 +220,7 @@ def _run(args, strategies, setups, workers, out) -> int:
                       for n, s in setups.items()}, strategies, args.trials, args.seed,
                      args.plan, args.all_orders,
                      str(out / "traces") if args.traces else "", tuple(args.backends), code,
-                     os.getcwd())
+                     os.getcwd(), args.inject_text)
     done = {key for key in store.done_keys() if plan.contains(key)}
     total = plan.total()
     store.write_metadata({k: v for k, v in vars(args).items() if k != "func"}, args.executor)
@@ -256,10 +259,10 @@ def _run(args, strategies, setups, workers, out) -> int:
     rows = by_backend(rows)  # (several backends: each strategy labelled with its own)
     summary = summarise(rows, {n: s.baseline_order for n, s in setups.items()})
     tests = reference_tests(rows, args.reference)
-    from cramlite.bench.agreement import backend_agreement
+    from cramlite.bench.agreement import backend_agreement, injection_counts
 
     text = write_summary(out, summary, tests, order_percentiles(rows) if args.all_orders else [],
-                         backend_agreement(rows))
+                         backend_agreement(rows), injection_counts(rows))
     from cramlite.bench.plots import write_plots
 
     plots = [] if args.no_plots else write_plots(rows, out)
@@ -332,6 +335,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="the strategy the paired tests compare every other with (one of "
                             "--strategies; default baseline if it runs, else the first)")
     bench.add_argument("--backend", help=BACKEND_HELP)
+    bench.add_argument("--inject", metavar="KIND=P,...", help=INJECT_HELP + " (part of "
+                       "each trial's key: a resume runs only the same injection)")
     bench.add_argument("--backends", dest="backends_list", metavar="A,B",
                        help="run every trial on each of these backends (the report puts "
                             "them side by side)")

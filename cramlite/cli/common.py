@@ -47,6 +47,10 @@ def command_help(name: str) -> str:
     return COMMANDS[name][1]
 
 
+INJECT_HELP = ("make executions fail now and then, as a robot's would, to exercise "
+               "recovery: grasp=P (the item slips as the fingers close), navigate=P (a "
+               "drive is refused before the base moves), detect=P (the camera sees nothing), "
+               "probabilities per attempt, drawn from a stream seeded by the trial's seed")
 BACKEND_HELP = ("what executes (and draws) it: pybullet, mujoco, kinematic, recording or a "
                 "plugin's (default: pybullet if it is installed, else mujoco if it is, "
                 "else kinematic)")

@@ -8,6 +8,7 @@ from cramlite.cli.common import (
     BACKEND_HELP,
     EXIT_OK,
     EXIT_PLAN_FAILED,
+    INJECT_HELP,
     chosen_backend,
     command_help,
     image_path,
@@ -105,6 +106,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     plan_function(args.plan)  # (a plan that cannot load: one line, exit 2)
     setup = load_setup(args.setup)
     order = _order(args.order, setup, args.strategy)
+    from cramlite.designators.injection import parse_inject
+
+    inject = parse_inject(args.inject)
     for path, option in ((args.trace, "--trace"), (args.image, "--image")):
         if path:
             writable_file(path, option)
@@ -119,7 +123,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     with runner:
         try:
             result = runner.run(args.strategy, args.plan, args.seed, params=params,
-                                dims=args.dims, trace=args.trace, order=order)
+                                dims=args.dims, trace=args.trace, order=order,
+                                inject=inject)
         except StrategyError as exc:  # e.g. optimal with too many items, a broken plugin
             raise UserInputError(str(exc), field="--strategy") from None
         if args.image:
@@ -150,6 +155,10 @@ def cmd_run(args: argparse.Namespace) -> int:
         if result.open_close_s:
             print(f"  opening and closing drawers and doors took {result.open_close_s:.2f} s of "
                   "that")
+        if inject:
+            injected = ", ".join(f"{k} {n}" for k, n in sorted(result.injected.items()))
+            print(f"  injected failures: {injected or 'none drawn'}"
+                  + ("; every one recovered" if result.injected and result.success else ""))
         if args.trace:
             print(f"  trace: {args.trace}")
         for failure in result.failures:
@@ -239,6 +248,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                      help="leave the drawers and doors the robot opens open until the plan "
                           "ends (default: each is closed as soon as its item is out or in)")
     run.add_argument("--backend", help=BACKEND_HELP)
+    run.add_argument("--inject", metavar="KIND=P,...", help=INJECT_HELP)
     run.add_argument("--gui", action="store_true",
                      help="show the PyBullet GUI (the pybullet backend; needs a display)")
     run.add_argument("--json", action="store_true", help="print one JSON object")

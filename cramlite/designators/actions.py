@@ -185,7 +185,12 @@ class PickUpAction(ActionDesignator):
         # the fingers close until they touch it
         MoveGripperMotion(reach.arm, "close", (obj.name,), width_m=reach.grasp.width_m,
                           ).perform(ctx)
-        AttachMotion(reach.arm, obj.name).perform(ctx)
+        try:
+            AttachMotion(reach.arm, obj.name).perform(ctx)
+        except GraspFailed:  # it slipped: open, back off, and let the next candidate try
+            MoveGripperMotion(reach.arm, "open", (obj.name,)).perform(ctx)
+            MoveArmJointsMotion(reach.pre_joints, (obj.name,)).perform(ctx)
+            raise
         ctx.holding[reach.arm] = Holding(
             obj.name, reach.grasp,
             relative=relative_pose(_se3(tool), (bx, by, bz), orientation))

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from cramlite.backends.base import Backend, ProcessModules
+from cramlite.designators.failures import PlanFailure
 from cramlite.designators.grasps import Grasp
 from cramlite.designators.monitors import Watch, first_firing
 from cramlite.designators.tasks import TaskTree
@@ -235,6 +236,8 @@ class RobotContext:
     overlap_s: float = 0.0
     #: Joint motions planned to run while the base drives next (`defer_to_next_drive`).
     deferred: list[Deferred] = field(default_factory=list)
+    #: Seeded failure injection of the trial (`cramlite.designators.injection`), if any.
+    injector: Any = None
 
     def __post_init__(self) -> None:
         self.checker = FootprintChecker(occupancy_map(self.scene))
@@ -388,9 +391,14 @@ class RobotContext:
         self.deferred.clear()
         t0 = self.time_s
         combined_base, combined_joints, start = combined
-        self.modules.execute_parallel(combined_base, combined_joints,
-                                      self._observer(t0, combined_base.times,
-                                                     ["base", *joints.names]))
+        try:
+            self.modules.execute_parallel(combined_base, combined_joints,
+                                          self._observer(t0, combined_base.times,
+                                                         ["base", *joints.names]))
+        except PlanFailure:  # (refused before anything moved: the joint motion still waits)
+            self.deferred.append(d)
+            self.observe()
+            raise
         self.observe()
         self.base_path_m += trajectory.length_m
         self.driven_xy.append(np.asarray(trajectory.poses)[:, :2].copy())

@@ -120,7 +120,9 @@ class DetectAction(ActionDesignator):
     def execute(self, ctx: RobotContext) -> dict[str, tuple[tuple[float, ...], tuple]]:
         if self._rng is None:
             self._rng = np.random.default_rng([self.seed, 3])  # (a stream of its own)
-        seen = {}
+        seen: dict[str, tuple[tuple[float, ...], tuple]] = {}
+        if ctx.injector is not None and ctx.injector.fails("detect"):
+            return seen  # (injected: the camera saw nothing this time)
         for name in ctx.scene.items:
             if name in ctx.scene.held or not sees(ctx, name):
                 continue

@@ -39,9 +39,10 @@ def build_report(folder: str | Path, *, figures: bool = True,
     tests = reference_tests(rows, (data.metadata.get("arguments") or {}).get("reference"))
     page = PageData(data, summary, [t for t in tests if t["pairs"]],
                     order_percentiles(rows), strategy_colours(data.strategies), baseline)
-    from cramlite.bench.agreement import backend_agreement
+    from cramlite.bench.agreement import backend_agreement, injection_counts
 
     page.agreement = backend_agreement(rows)
+    page.injection = injection_counts(rows)
     page.interest, page.failed_left_out = trials_of_interest(rows)
     media = data.path / MEDIA
     try:

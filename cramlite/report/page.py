@@ -70,6 +70,8 @@ class PageData:
     figures_note: str = ""  #: why there are no pictures ("" when there are)
     #: The backends side by side (`cramlite.bench.agreement`; empty for one backend).
     agreement: list[dict[str, Any]] = field(default_factory=list)
+    #: Failures injected (`bench --inject`), per strategy (`cramlite.bench.agreement`).
+    injection: list[dict[str, Any]] = field(default_factory=list)
 
 
 def e(value: Any) -> str:
@@ -119,7 +121,8 @@ def render_page(data: PageData) -> str:
                  + "</nav>")
     if data.agreement:
         links.insert(2, ("backends", "Backends"))
-    parts += [_run(folder), _summary(data), _agreement(data), _tests(data), _plots(data)]
+    parts += [_run(folder), _summary(data), _agreement(data), _injection(data), _tests(data),
+              _plots(data)]
     parts += [_setup(data, s) for s in setups]
     parts += [_all_orders(data), _failures(data), "</body></html>\n"]
     return "\n".join(p for p in parts if p)
@@ -149,6 +152,8 @@ def rerun_command(row: dict[str, Any], setup: Any = None) -> str:
     words += ["--seed", str(row.get("seed", 0))]
     if row.get("backend"):
         words += ["--backend", row["backend"]]
+    if row.get("inject"):
+        words += ["--inject", row["inject"]]
     return shlex.join(words)
 
 
@@ -262,6 +267,24 @@ def _agreement(data: PageData) -> str:
     return (head + "<table><tr><th>setup</th><th>strategy</th><th>trial</th><th>backends"
             "</th><th>order</th><th>success</th><th>largest item gap</th></tr>" + rows
             + "</table>")
+
+
+def _injection(data: PageData) -> str:
+    """What `--inject` did: failures drawn, trials recovered, items lost, per strategy."""
+    if not data.injection:
+        return ""
+    rows = "".join(
+        f"<tr><td>{e(x['strategy'])}</td><td>{e(x['inject'])}</td>"
+        f"<td class=n>{x['trials']}</td><td>"
+        + e(", ".join(f"{k} {n}" for k, n in sorted(x["drawn"].items())) or "none drawn")
+        + f"</td><td class=n>{x['recovered']} of {x['with_failures']}</td>"
+        f"<td class=\"n{' bad' if x['lost'] else ''}\">{x['lost']}</td></tr>"
+        for x in data.injection)
+    return ('<h2 id="injected">Injected failures</h2><p class="note">Executions failed on '
+            "purpose (<code>--inject</code>, seeded by each trial's seed): recovered = trials "
+            "with a failure drawn that still set everything in place.</p><table><tr>"
+            "<th>strategy</th><th>inject</th><th>trials</th><th>failures drawn</th>"
+            "<th>recovered</th><th>items lost</th></tr>" + rows + "</table>")
 
 
 def _tests(data: PageData) -> str:
