@@ -5,6 +5,7 @@ one after the other); the robot's time counts overlapping motions once."""
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -118,3 +119,27 @@ def test_a_combined_motion_that_collides_is_refused_and_runs_one_after_the_other
         sent = backend.sent[-1]
         assert json.dumps(sent)  # (what a driver would be sent: plain JSON)
         assert len(sent["times"]) == len(sent["poses"]) == len(sent["positions"])
+
+
+@pytest.mark.parametrize("together", [True, False])
+def test_parallel_of_the_torso_and_a_drive_takes_the_longer_ones_time(together: bool) -> None:
+    from cramlite.designators import (
+        MoveTorsoAction,
+        NavigateAction,
+        Parallel,
+        ParkArmsAction,
+        simulated_robot,
+    )
+    from cramlite.world.setup import load_setup
+
+    options = ExecutionOptions(parallel_motion=together)
+    with simulated_robot(load_setup("v1"), backend="kinematic", options=options) as ctx:
+        ParkArmsAction().perform(ctx)
+        t0, drive0, arm0 = ctx.time_s, ctx.drive_s, ctx.arm_s
+        Parallel([MoveTorsoAction(0.25), NavigateAction((-0.5, -0.8, math.pi / 2))]).perform(ctx)
+        torso, drive = ctx.arm_s - arm0, ctx.drive_s - drive0
+        assert torso > 15.0 and drive > 0.5  # (the torso rises 25 cm at 1.3 cm/s)
+        assert ctx.modules.joint_positions([TORSO])[TORSO] == pytest.approx(0.25)
+        assert ctx.modules.base_pose()[1] == pytest.approx(-0.8, abs=0.05)
+        took = ctx.time_s - t0
+        assert took == pytest.approx(max(torso, drive) if together else torso + drive, abs=1e-6)

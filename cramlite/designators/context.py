@@ -238,6 +238,8 @@ class RobotContext:
     deferred: list[Deferred] = field(default_factory=list)
     #: Seeded failure injection of the trial (`cramlite.designators.injection`), if any.
     injector: Any = None
+    #: Inside a `Parallel`: joint motions wait for the next drive (see `deferring`).
+    defer_joint_motions: bool = False
 
     def __post_init__(self) -> None:
         self.checker = FootprintChecker(occupancy_map(self.scene))
@@ -320,8 +322,24 @@ class RobotContext:
             raise fired
 
     def move_joints(self, trajectory: JointTrajectory) -> None:
+        if self.defer_joint_motions and not self.deferred and self.options.parallel_motion \
+                and not self.monitors and not trajectory.world and len(trajectory.positions):
+            self.defer_to_next_drive(trajectory)  # (inside a Parallel: with the next drive)
+            return
         self.flush_deferred()  # (a deferred motion runs first, where it was planned)
         self._execute_joints(trajectory)
+
+    @contextlib.contextmanager
+    def deferring(self) -> Iterator[None]:
+        """Within: a joint motion waits for the next drive and runs with it (see
+        `Parallel`); at the end, whatever still waits runs."""
+        before, self.defer_joint_motions = self.defer_joint_motions, True
+        try:
+            yield
+        finally:
+            self.defer_joint_motions = before
+        if not before:
+            self.flush_deferred()
 
     def _execute_joints(self, trajectory: JointTrajectory) -> None:
         t0 = self.time_s

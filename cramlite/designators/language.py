@@ -117,16 +117,20 @@ class TryAll:
 
 @dataclass
 class Parallel:
-    """All steps, one after another; every one runs, and the first failure escapes
-    afterwards. (Motions at once: `while_driving=True` on MoveTorsoAction, ParkArmsAction
-    and MoveArmJointsMotion runs the motion with the next drive, checked as one.)"""
+    """All steps; every one runs, and the first failure escapes afterwards. A joint motion
+    (the torso, an arm) of a step before a step that drives runs *with* that drive, as one
+    combined motion checked as one (so `Parallel([MoveTorsoAction(0.25),
+    NavigateAction(goal)])` takes the longer of the two); other motions run one after the
+    other, and whatever waits for a drive that does not come runs when the steps are done.
+    (`while_driving=True` on MoveTorsoAction, ParkArmsAction and MoveArmJointsMotion asks
+    for the same outside a Parallel.)"""
 
     steps: Iterable[Step]
 
     def perform(self, ctx: RobotContext) -> list[Any]:
         results: list[Any] = []
         first: PlanFailure | None = None
-        with _node(ctx, "Parallel"):
+        with _node(ctx, "Parallel"), ctx.deferring():
             for step in self.steps:
                 try:
                     results.append(_run(step, ctx))
