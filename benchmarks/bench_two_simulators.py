@@ -31,7 +31,8 @@ def _trials(backend: str, setups: list[str], strategies: list[str]) -> dict:
             loaded = time.perf_counter() - start
             for strategy in strategies:
                 result = runner.run(strategy, seed=0)
-                out[(setup, strategy)] = (result, loaded, getattr(runner.modules, "steps", 0))
+                out[(setup, strategy)] = (result, loaded,
+                                          result.simulator.get("physics_steps", 0))
     return out
 
 

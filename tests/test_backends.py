@@ -104,13 +104,19 @@ needs_mujoco = pytest.mark.skipif(importlib.util.find_spec("mujoco") is None,
 MUJOCO_SETUPS = ("v1", "c1")
 
 
+def _opm_and_baseline(setup: str, backends: tuple[str, ...]) -> dict[str, list]:
+    """The opm and baseline trials (seed 0) of a setup on each backend."""
+    results = {}
+    for backend in backends:
+        with TrialRunner(setup, backend=backend) as runner:
+            results[backend] = [runner.run(s, seed=0) for s in ("opm", "baseline")]
+    return results
+
+
 @needs_pybullet
 @pytest.mark.parametrize("setup", ["v1", "v2", "v3", "v4", "v5", "c1", "c2", "c3"])
 def test_kinematic_and_pybullet_backends_give_the_same_trials(setup: str) -> None:
-    results = {}
-    for backend in ("pybullet", "kinematic"):
-        with TrialRunner(setup, backend=backend) as runner:
-            results[backend] = [runner.run(s, seed=0) for s in ("opm", "baseline")]
+    results = _opm_and_baseline(setup, ("pybullet", "kinematic"))
     for py, kin in zip(results["pybullet"], results["kinematic"], strict=True):
         assert py.success and kin.success, (py.failures, kin.failures)
         assert (py.backend, kin.backend) == ("pybullet", "kinematic")
@@ -133,10 +139,7 @@ def test_two_simulators_agree_on_orders_success_and_where_items_settle(setup: st
     """PyBullet and MuJoCo each settle the items they are given: the same orders and
     success, every item within the placing tolerance of its target in both, and within
     1 cm of where the other simulator left it; drawers and doors closed in both."""
-    results = {}
-    for backend in ("pybullet", "mujoco"):
-        with TrialRunner(setup, backend=backend) as runner:
-            results[backend] = [runner.run(s, seed=0) for s in ("opm", "baseline")]
+    results = _opm_and_baseline(setup, ("pybullet", "mujoco"))
     for py, mj in zip(results["pybullet"], results["mujoco"], strict=True):
         assert py.success and mj.success, (py.failures, mj.failures)
         assert mj.backend == "mujoco" and py.order == mj.order

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from cramlite.motion.trajectory import BaseTrajectory, JointTrajectory
@@ -23,8 +24,25 @@ from cramlite.scene.transforms import Pose
 from cramlite.world.setup import Setup
 
 BasePose = tuple[float, float, float]
+#: A settling item is at rest below these speeds, seen so twice in a row, looking every
+#: SETTLE_CHUNK_STEPS physics steps (the physics backends' `settle`).
+REST_LINEAR_M_S = 0.005
+REST_ANGULAR_RAD_S = 0.05
+SETTLE_CHUNK_STEPS = 6
 #: Called with the index of each state right after the robot reached it.
 StateObserver = Callable[[int], None] | None
+
+
+@dataclass
+class PhysicsRecord:
+    """What a physics backend measured since the trial started (`simulator_report`)."""
+
+    steps: int = 0  #: physics steps taken
+    deepest_contact_m: float = 0.0  #: the deepest item contact seen while settling
+
+    def report(self) -> dict[str, float]:
+        return {"physics_steps": self.steps,
+                "deepest_contact_m": round(self.deepest_contact_m, 6)}
 
 
 class ProcessModules(ABC):

@@ -20,16 +20,21 @@ from typing import Any
 AGREEMENT_TOLERANCE_M = 0.01
 
 
-def _positions(row: dict[str, Any]) -> dict[str, list[float]]:
-    """Where each item ended (the `items` column: JSON text, or parsed by the report)."""
-    items = row.get("items") or {}
-    if isinstance(items, str):
+def _mapping(row: dict[str, Any], column: str) -> dict[str, Any]:
+    """A JSON-object column of a row (text in trials.csv, already parsed by the report);
+    {} if it is empty or not an object."""
+    value = row.get(column) or {}
+    if isinstance(value, str):
         try:
-            items = json.loads(items)
+            value = json.loads(value)
         except ValueError:
             return {}
-    if not isinstance(items, dict):
-        return {}
+    return value if isinstance(value, dict) else {}
+
+
+def _positions(row: dict[str, Any]) -> dict[str, list[float]]:
+    """Where each item ended (the `items` column)."""
+    items = _mapping(row, "items")
     return {n: v["position"] for n, v in items.items()
             if isinstance(v, dict) and isinstance(v.get("position"), list)}
 
@@ -99,12 +104,7 @@ def injection_counts(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     for row in rows:
         if not row.get("inject"):
             continue
-        drawn = row.get("injected") or {}
-        if isinstance(drawn, str):
-            try:
-                drawn = json.loads(drawn)
-            except ValueError:
-                drawn = {}
+        drawn = _mapping(row, "injected")
         entry = out.setdefault(row["strategy"], {"strategy": row["strategy"],
                                                  "inject": row["inject"], "trials": 0,
                                                  "with_failures": 0, "recovered": 0,
@@ -115,12 +115,7 @@ def injection_counts(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             entry["recovered"] += str(row.get("success")) == "True"
         for kind, n in drawn.items():
             entry["drawn"][kind] = entry["drawn"].get(kind, 0) + int(n)
-        items = row.get("items") or {}
-        if isinstance(items, str):
-            try:
-                items = json.loads(items)
-            except ValueError:
-                items = {}
+        items = _mapping(row, "items")
         entry["lost"] += sum(1 for v in items.values() if isinstance(v, dict)
                              and v.get("ok") is False)
     return sorted(out.values(), key=lambda e: e["strategy"])

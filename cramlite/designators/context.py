@@ -315,15 +315,18 @@ class RobotContext:
             self.modules.execute_base_trajectory(trajectory,
                                                  self._observer(t0, trajectory.times))
         self.observe()
-        self.base_path_m += trajectory.length_m
-        self.driven_xy.append(np.asarray(trajectory.poses)[:, :2].copy())
-        self.drive_s += trajectory.duration_s
+        self._count_drive(trajectory)
         if fired is not None:
             raise fired
 
+    def _count_drive(self, trajectory: BaseTrajectory) -> None:
+        """Add an executed drive to the path driven and the driving time."""
+        self.base_path_m += trajectory.length_m
+        self.driven_xy.append(np.asarray(trajectory.poses)[:, :2].copy())
+        self.drive_s += trajectory.duration_s
+
     def move_joints(self, trajectory: JointTrajectory) -> None:
-        if self.defer_joint_motions and not self.deferred and self.options.parallel_motion \
-                and not self.monitors and not trajectory.world and len(trajectory.positions):
+        if self.defer_joint_motions and not self.deferred and self._can_defer(trajectory):
             self.defer_to_next_drive(trajectory)  # (inside a Parallel: with the next drive)
             return
         self.flush_deferred()  # (a deferred motion runs first, where it was planned)
@@ -364,8 +367,7 @@ class RobotContext:
         combined state, else alone before whatever moves next (where it was planned and
         checked: nothing has moved since). Without `parallel_motion`, or while monitors
         watch, it runs now."""
-        if not self.options.parallel_motion or self.monitors or trajectory.world \
-                or not len(trajectory.positions):
+        if not self._can_defer(trajectory):
             self.move_joints(trajectory)
             return
         self.flush_deferred()  # (one at a time)
@@ -374,6 +376,12 @@ class RobotContext:
         self.deferred.append(Deferred(trajectory, nodes))
         self.scene.belief.joints.update(trajectory.final())
         self.footprint_stale = True
+
+    def _can_defer(self, trajectory: JointTrajectory) -> bool:
+        """May a joint motion wait for the next drive: parallel motion on, no monitor
+        watching, no drawer or door moving with it, and something to move?"""
+        return self.options.parallel_motion and not self.monitors \
+            and not trajectory.world and len(trajectory.positions) > 0
 
     def flush_deferred(self) -> None:
         """Execute deferred joint motions now, one after the other."""
@@ -390,7 +398,7 @@ class RobotContext:
         the joints' times before and after the drive and at the drive's own times during
         it (resampling a timed base path would bend it), checked together, sent together.
         False (nothing done) if no start is free."""
-        (d,) = self.deferred[:1] if len(self.deferred) == 1 else (None,)
+        d = self.deferred[0] if len(self.deferred) == 1 else None
         if d is None or not len(trajectory.poses):
             return False
         joints = d.trajectory
@@ -418,9 +426,7 @@ class RobotContext:
             self.observe()
             raise
         self.observe()
-        self.base_path_m += trajectory.length_m
-        self.driven_xy.append(np.asarray(trajectory.poses)[:, :2].copy())
-        self.drive_s += trajectory.duration_s
+        self._count_drive(trajectory)
         self.arm_s += joints.duration_s
         self.overlap_s += max(0.0, min(joints.duration_s - start, trajectory.duration_s))
         self.footprint_stale = True

@@ -36,7 +36,7 @@ except Exception as exc:  # a MUJOCO_GL it cannot use makes the import itself fa
     finally:
         os.environ["MUJOCO_GL"] = asked  # (what the user set, as messages name it)
 
-from cramlite.backends.base import Backend  # noqa: E402  (after MUJOCO_GL is settled)
+from cramlite.backends.base import Backend, PhysicsRecord  # noqa: E402  (after MUJOCO_GL is settled)
 from cramlite.scene.transforms import Pose  # noqa: E402
 from cramlite.world.setup import Setup  # noqa: E402
 
@@ -58,7 +58,7 @@ class MujocoBackend(Backend):
 
     def reset(self, poses: dict[str, Pose] | None = None) -> None:
         self.modules.release_all()
-        self.modules.steps, self.modules.deepest_contact_m = 0, 0.0  # (counted per trial)
+        self.modules.physics = PhysicsRecord()  # (counted per trial)
         self.world.restore(self._initial)
         for name, (position, orientation) in (poses or {}).items():
             self.world.set_object_pose(name, position, orientation)

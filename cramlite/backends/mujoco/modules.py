@@ -15,17 +15,19 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from cramlite.backends.base import BasePose, ProcessModules, StateObserver
+from cramlite.backends.base import (
+    REST_ANGULAR_RAD_S,
+    REST_LINEAR_M_S,
+    SETTLE_CHUNK_STEPS,
+    BasePose,
+    PhysicsRecord,
+    ProcessModules,
+    StateObserver,
+)
 from cramlite.backends.mujoco.world import TIME_STEP_S, MujocoWorld
 from cramlite.motion.trajectory import BaseTrajectory, JointTrajectory
 from cramlite.scene.scene import tool_frame
 from cramlite.scene.transforms import Pose, inverse, matrix_pose, pose_matrix
-
-#: A settling item is at rest below these speeds (the pybullet backend's).
-REST_LINEAR_M_S = 0.005
-REST_ANGULAR_RAD_S = 0.05
-#: Physics steps between two looks at whether the items rest (12 ms).
-SETTLE_CHUNK_STEPS = 6
 
 
 class MujocoModules(ProcessModules):
@@ -35,9 +37,7 @@ class MujocoModules(ProcessModules):
         self.world = world
         #: Held items: the item's pose in the tool frame, by item (and its arm).
         self._attached: dict[str, tuple[str, np.ndarray]] = {}
-        #: Physics steps taken, and the deepest item contact seen while settling (m).
-        self.steps = 0
-        self.deepest_contact_m = 0.0
+        self.physics = PhysicsRecord()
 
     def release_all(self) -> None:
         for obj, (arm, _) in list(self._attached.items()):
@@ -96,8 +96,8 @@ class MujocoModules(ProcessModules):
             chunk = min(SETTLE_CHUNK_STEPS, steps - done)
             w.step(chunk)
             done += chunk
-            self.deepest_contact_m = max([self.deepest_contact_m,
-                                          *(depth for *_, depth in w.contacts())])
+            self.physics.deepest_contact_m = max([self.physics.deepest_contact_m,
+                                                  *(depth for *_, depth in w.contacts())])
             for obj, pose in held.items():
                 w.set_object_pose(obj, *pose)
             resting = resting + 1 if objects and all(
@@ -105,7 +105,7 @@ class MujocoModules(ProcessModules):
                 for linear, angular in map(w.object_speed, objects)) else 0
             if resting >= 2:  # at rest over two looks, not at the top of a bounce
                 break
-        self.steps += done
+        self.physics.steps += done
         w.set_joint_positions(robot)
         for name, value in drawers.items():
             w.data.qpos[w.world_qpos[name]] = value
@@ -114,8 +114,7 @@ class MujocoModules(ProcessModules):
         self._carry()
 
     def simulator_report(self) -> dict[str, float]:
-        return {"physics_steps": self.steps,
-                "deepest_contact_m": round(self.deepest_contact_m, 6)}
+        return self.physics.report()
 
     def base_pose(self) -> BasePose:
         return self.world.base_pose()

@@ -29,7 +29,7 @@ import mujoco
 import numpy as np
 
 from cramlite.errors import SetupError
-from cramlite.scene.transforms import Pose, Quat, Vec3, yaw_quat
+from cramlite.scene.transforms import Pose, Quat, Vec3, matrix_pose, pose_matrix, yaw_quat
 from cramlite.world.containers import Container, load_containers
 from cramlite.world.pr2 import pr2_urdf_path
 from cramlite.world.setup import Setup
@@ -261,8 +261,6 @@ class MujocoWorld:
 
     def set_world_joint(self, name: str, value: float, exclude: set[str] | None = None) -> None:
         """Move a drawer or door; items inside a drawer move with it (but `exclude`)."""
-        from cramlite.scene.transforms import matrix_pose, pose_matrix
-
         container = self.container_of_joint(name)
         carried = []
         if container is not None and container.inside_link == container.link:

@@ -3,7 +3,7 @@ and TinyRenderer images. Raw PyBullet calls stay inside this package."""
 
 from __future__ import annotations
 
-from cramlite.backends.base import Backend
+from cramlite.backends.base import Backend, PhysicsRecord
 from cramlite.scene.transforms import Pose
 from cramlite.world.setup import Setup
 
@@ -31,7 +31,7 @@ class PyBulletBackend(Backend):
 
     def reset(self, poses: dict[str, Pose] | None = None) -> None:
         self.modules.release_all()
-        self.modules.steps, self.modules.deepest_contact_m = 0, 0.0  # (counted per trial)
+        self.modules.physics = PhysicsRecord()  # (counted per trial)
         self.world.restore(self._initial)
         for name, (position, orientation) in (poses or {}).items():
             self.world.objects[name].set_pose(position, orientation)

@@ -9,17 +9,20 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from cramlite.backends.base import BasePose, ProcessModules, StateObserver
+from cramlite.backends.base import (
+    REST_ANGULAR_RAD_S,
+    REST_LINEAR_M_S,
+    SETTLE_CHUNK_STEPS,
+    BasePose,
+    PhysicsRecord,
+    ProcessModules,
+    StateObserver,
+)
 from cramlite.backends.pybullet.bodies import Quat, Vec3
 from cramlite.backends.pybullet.client import p
 from cramlite.backends.pybullet.world import TIME_STEP_S, World
 from cramlite.motion.trajectory import BaseTrajectory, JointTrajectory
 from cramlite.scene.scene import tool_frame
-
-#: A settling object is at rest below these speeds.
-REST_LINEAR_M_S = 0.005
-REST_ANGULAR_RAD_S = 0.05
-SETTLE_CHUNK_STEPS = 6
 
 
 class SimulatedProcessModules(ProcessModules):
@@ -30,9 +33,7 @@ class SimulatedProcessModules(ProcessModules):
         self.robot = world.robot
         self.client = world.client
         self._attached: dict[str, tuple[str, tuple[Vec3, Quat], float]] = {}
-        #: Physics steps taken, and the deepest item contact seen while settling (m).
-        self.steps = 0
-        self.deepest_contact_m = 0.0
+        self.physics = PhysicsRecord()
         for link in range(-1, p.getNumJoints(self.robot.body, physicsClientId=self.client)):
             # the robot moves kinematically; physics steps (settling) must not push it or items
             p.setCollisionFilterGroupMask(self.robot.body, link, 0, 0,
@@ -103,12 +104,13 @@ class SimulatedProcessModules(ProcessModules):
             done += chunk
             for body in bodies:  # (contact distance < 0: penetration)
                 for point in p.getContactPoints(bodyA=body, physicsClientId=self.client):
-                    self.deepest_contact_m = max(self.deepest_contact_m, -point[8])
+                    self.physics.deepest_contact_m = max(self.physics.deepest_contact_m,
+                                                         -point[8])
             resting = resting + 1 if bodies and all(_at_rest(b, self.client)
                                                     for b in bodies) else 0
             if resting >= 2:  # at rest over two checks, not at the top of a bounce
                 break
-        self.steps += done
+        self.physics.steps += done
         self.robot.set_joint_positions(joints)  # undo any sag of the unactuated joints
         for name, value in drawers.items():  # and any give of the drawers and doors
             p.resetJointState(self.world.environment, self.world.world_joints[name], value,
@@ -116,8 +118,7 @@ class SimulatedProcessModules(ProcessModules):
         self._carry()
 
     def simulator_report(self) -> dict[str, float]:
-        return {"physics_steps": self.steps,
-                "deepest_contact_m": round(self.deepest_contact_m, 6)}
+        return self.physics.report()
 
     def base_pose(self) -> BasePose:
         return self.robot.base_pose()
