@@ -29,6 +29,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
               "answer JSON ordering requests (the OPM service without ROS)"),
     "evaluate": ("cramlite.cli.evaluation", "score a strategy against human sequences"),
     "fit": ("cramlite.cli.evaluation", "grid-search a strategy's parameters (Table 3.4)"),
+    "simulate": ("cramlite.cli.evaluation",
+                 "synthetic episodes drawn from a strategy (parameter recovery)"),
     "replay": ("cramlite.cli.replay",
                "replay a trace (cramlite run --trace): GIF, GUI or collision check"),
     "train": ("cramlite.cli.learning", "train a learned ordering strategy (RNN, NN, CPT)"),

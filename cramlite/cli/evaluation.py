@@ -1,4 +1,5 @@
-"""`cramlite evaluate` and `cramlite fit`: strategies against human sequences."""
+"""`cramlite evaluate`, `cramlite fit` and `cramlite simulate`: strategies against human
+sequences, and synthetic sequences drawn from a strategy."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import contextlib
 import os
 import sys
 from collections.abc import Iterator
+from pathlib import Path
 
 from cramlite.cli.common import (
     EXIT_OK,
@@ -15,10 +17,11 @@ from cramlite.cli.common import (
     positive_int,
     progress_bar,
     strategy_checked,
+    writable_file,
     writable_folder,
 )
 from cramlite.errors import UserInputError
-from cramlite.evaluation.options import DIM_NAMES, METRICS, PROTOCOLS
+from cramlite.evaluation.options import DEFAULT_TEMPERATURE, DIM_NAMES, METRICS, PROTOCOLS
 from cramlite.strategies.base import StrategyError
 
 
@@ -152,6 +155,10 @@ def _print_fit(args: argparse.Namespace, episodes, summary) -> int:
     for d, row in summary["by_projection"].items():
         params = ", ".join(f"{k}={v:.1f}" for k, v in row["params"].items())
         print(f"  {d:<4} best {params}: mean {row['mean']:.3f}, median {row['median']:.3f}")
+        flat = {k: v for k, v in row["tied_best"].items() if v[1] > v[0]}
+        if flat:  # (the first grid point of a plateau is only one of equals)
+            print("       the grid points that fit exactly as well span "
+                  + ", ".join(f"{k} {lo:.1f}-{hi:.1f}" for k, (lo, hi) in flat.items()))
     best = summary["best"]
     print(f"best: {best['dims']} mean {best['mean']:.3f}")
     if "source_params" in summary:
@@ -169,6 +176,41 @@ def _print_fit(args: argparse.Namespace, episodes, summary) -> int:
         print(f"wrote {kind}: {path}")
     return EXIT_OK
 
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    import json
+
+    from cramlite.evaluation.data import load_episodes
+    from cramlite.evaluation.simulate import simulate, write_episodes
+    from cramlite.resources import resolve_data_path
+
+    params = parse_params(args.params)
+    strategy_checked(args.strategy, params=params, dims=args.dims, form=args.form)
+    writable_file(args.out, "--out")
+    like = str(resolve_data_path(args.like))
+    episodes, _ = load_episodes(like)
+    try:
+        drawn = simulate(episodes, args.episodes or len(episodes), args.strategy, params,
+                         args.temperature, args.seed, args.dims, args.form)
+    except StrategyError as exc:
+        raise UserInputError(str(exc), field="--strategy") from None
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    write_episodes(drawn, out)
+    summary = {"episodes": len(drawn), "like": like, "strategy": args.strategy,
+               "params": params, "dims": args.dims, "form": args.form,
+               "temperature": args.temperature, "seed": args.seed,
+               "choice_rule": "P(item) proportional to exp(-cost / temperature)",
+               "file": str(out)}
+    with quiet_broken_pipe():
+        if args.json:
+            print(json.dumps(summary))
+        else:
+            print(f"wrote {len(drawn)} episodes drawn from {args.strategy} "
+                  f"({', '.join(f'{k}={v:g}' for k, v in params.items()) or 'its defaults'}; "
+                  f"softmax over costs, temperature {args.temperature:g}; seed {args.seed}), "
+                  f"the tasks of {args.like}: {out}")
+    return EXIT_OK
 
 
 def _add_data_arguments(p: argparse.ArgumentParser, metrics: tuple[str, ...]) -> None:
@@ -221,3 +263,25 @@ def register(sub: argparse._SubParsersAction) -> None:
                               "all cores); opm, nearest, opm-2step and optimal under APE are "
                               "vectorised over the grid")
     fit_cmd.set_defaults(func=cmd_fit)
+
+    sim = sub.add_parser("simulate", help="synthetic episodes drawn from a strategy "
+                                          "(parameter recovery)")
+    sim.add_argument("--like", default="table-setting",
+                     help="the recorded episodes whose tasks are copied (items, positions, "
+                          "start positions): a CSV or a shipped set (default table-setting)")
+    sim.add_argument("--strategy", default="opm",
+                     help="an OPM-family strategy (its cost per item drives the choice)")
+    sim.add_argument("--params", help="e.g. strong_k=0.4,mid_k=0.5,food_k=1.5,c=1.3")
+    sim.add_argument("--dims", default="xy", choices=DIM_NAMES, help="projection")
+    sim.add_argument("--form", default="power", choices=("power", "additive", "product"),
+                     help="functional form (Eq. 3.1-3.3)")
+    sim.add_argument("--temperature", type=float, default=DEFAULT_TEMPERATURE,
+                     help="softmax over costs: P(item) ~ exp(-cost / T); 0 takes the "
+                          f"lowest cost (default {DEFAULT_TEMPERATURE})")
+    sim.add_argument("--episodes", type=positive_int,
+                     help="how many (default: as many as --like has; the j-th copies the "
+                          "task of episode j modulo that)")
+    sim.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
+    sim.add_argument("--out", default="simulated.csv", help="the CSV to write")
+    sim.add_argument("--json", action="store_true", help="print one JSON object")
+    sim.set_defaults(func=cmd_simulate)

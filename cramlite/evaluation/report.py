@@ -21,7 +21,9 @@ def fit_summary(result: FitResult, baselines: list[float]) -> dict[str, Any]:
         samples[dims] = column
         per_dims[dims] = {"params": result.params(index), "mean": float(np.nanmean(column)),
                           "median": float(np.nanmedian(column)),
-                          "episodes": int(np.isfinite(column).sum())}
+                          "episodes": int(np.isfinite(column).sum()),
+                          "tied_best": {name: list(span) for name, span
+                                        in result.tied_best(dims).items()}}
     best_dims, best_index = result.best()
     summary: dict[str, Any] = {
         "strategy": result.strategy, "metric": result.metric, "grid_points": len(result.configs),
