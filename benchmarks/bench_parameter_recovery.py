@@ -20,22 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from cramlite.evaluation.data import load_episodes, parse_row
-from cramlite.evaluation.fit import PARAM_NAMES, fit, source_grid
+from cramlite.evaluation.data import load_episodes
+from cramlite.evaluation.fit import PARAM_NAMES
 from cramlite.evaluation.options import DEFAULT_TEMPERATURE
-from cramlite.evaluation.simulate import episode_row, simulate
+from cramlite.evaluation.recovery import recovery_study, recovery_table
 from cramlite.resources import resolve_data_path
-
-STEP = 0.1 + 1e-9
-
-
-def recover(like, params: dict[str, float], episodes: int, temperature: float, seed: int):
-    drawn = simulate(like, episodes, "opm", params, temperature, seed)
-    # (through the published format, as `cramlite simulate` writes it and `fit` reads it)
-    synthetic = [parse_row(episode_row(e)) for e in drawn]
-    result = fit(synthetic, "opm", ("xy",), "expected-ape")
-    _, index = result.best("xy")
-    return result.params(index), result.tied_best("xy")
 
 
 def main() -> None:
@@ -48,33 +37,22 @@ def main() -> None:
     parser.add_argument("--plot", help="write the recovery plot here (PNG)")
     args = parser.parse_args()
     like, _ = load_episodes(resolve_data_path(args.like))
-    grid = source_grid()
-    picks = np.random.default_rng(2026).choice(len(grid), size=args.sets, replace=False)
     started = time.perf_counter()
-    rows = []
-    for g in picks:
-        truth = dict(zip(PARAM_NAMES, map(float, grid[g]), strict=True))
-        for seed in range(args.seeds):
-            best, tied = recover(like, truth, args.episodes, args.temperature, seed)
-            rows.append((truth, best, tied))
+    runs = recovery_study(like, args.sets, args.seeds, args.episodes, args.temperature)
     seconds = time.perf_counter() - started
     print(f"{args.sets} parameter sets x {args.seeds} seeds, {args.episodes} episodes like "
           f"{args.like}, temperature {args.temperature}: {seconds:.1f} s")
     print("| parameter | recovered within 0.1 | on a plateau that holds it | mean plateau width |")
     print("|---|---|---|---|")
-    for name in PARAM_NAMES:
-        hit = np.mean([abs(b[name] - t[name]) <= STEP for t, b, _ in rows])
-        held = np.mean([tied[name][0] - STEP <= t[name] <= tied[name][1] + STEP
-                        for t, _, tied in rows])
-        width = np.mean([tied[name][1] - tied[name][0] for _, _, tied in rows])
-        print(f"| {name} | {100 * hit:.0f} % | {100 * held:.0f} % | {width:.2f} |")
-    every = np.mean([all(abs(b[n] - t[n]) <= STEP for n in PARAM_NAMES) for t, b, _ in rows])
-    kc = np.mean([all(abs(b[n] - t[n]) <= STEP for n in ("strong_k", "mid_k", "c"))
-                  for t, b, _ in rows])
+    for row in recovery_table(runs):
+        print(f"| {row['parameter']} | {100 * row['recovered']:.0f} % | "
+              f"{100 * row['on_plateau']:.0f} % | {row['plateau_width']:.2f} |")
+    every = np.mean([all(r.recovered(n) for n in PARAM_NAMES) for r in runs])
+    kc = np.mean([all(r.recovered(n) for n in ("strong_k", "mid_k", "c")) for r in runs])
     print(f"every parameter recovered: {100 * every:.0f} % of fits; strong k, mid k and c: "
           f"{100 * kc:.0f} %")
     if args.plot:
-        plot(rows, args.plot, args.temperature, args.episodes)
+        plot(runs, args.plot, args.temperature, args.episodes)
         print(f"wrote {args.plot}")
 
 
@@ -86,10 +64,10 @@ def plot(rows, path: str, temperature: float, episodes: int) -> None:
     fig, axes = plt.subplots(1, len(PARAM_NAMES), figsize=(13, 3.6))
     jitter = np.random.default_rng(0)
     for ax, name in zip(axes, PARAM_NAMES, strict=True):
-        truth = np.array([t[name] for t, _, _ in rows])
-        best = np.array([b[name] for _, b, _ in rows])
-        lo = np.array([tied[name][0] for _, _, tied in rows])
-        hi = np.array([tied[name][1] for _, _, tied in rows])
+        truth = np.array([r.truth[name] for r in rows])
+        best = np.array([r.best[name] for r in rows])
+        lo = np.array([r.plateau[name][0] for r in rows])
+        hi = np.array([r.plateau[name][1] for r in rows])
         x = truth + jitter.uniform(-0.025, 0.025, len(truth))
         ax.vlines(x, lo, hi, color="tab:blue", alpha=0.35, linewidth=3,
                   label="fits as well (plateau)")

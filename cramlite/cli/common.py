@@ -36,6 +36,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "train": ("cramlite.cli.learning", "train a learned ordering strategy (RNN, NN, CPT)"),
     "compare": ("cramlite.cli.learning",
                 "compare strategies on human sequences (Wilcoxon, Figure 3.18)"),
+    "reproduce": ("cramlite.cli.reproduce",
+                  "rebuild every table the README claims, beside the published ones"),
     "bench": ("cramlite.cli.bench",
               "run many trials (setups x strategies x trials) and summarise them"),
     "report": ("cramlite.cli.report",

@@ -47,9 +47,20 @@ def episodes_to_score(strategy: str, episodes: Sequence[Episode], protocol: str,
     return [ep for ep in episodes if ep.id in test]
 
 
+#: What `thesis_ape` may vary, for the ablation of `cramlite reproduce` (the defaults are
+#: the protocol): which positions are scored (`n-1`, the APE's; `n`, every one, as for
+#: the CPT), what primes the RNN after an item it never saw (`last-known`: the last item
+#: it knows; `start`: the start token), and how the RNN picks (`sample` at the
+#: temperature, or `argmax`).
+ABLATIONS = {"positions": ("n-1", "n"), "unseen_prime": ("last-known", "start"),
+             "choice": ("sample", "argmax")}
+
+
 def thesis_ape(model: LearnedModel, episode: Episode, repeats: int,
-               rng: np.random.Generator) -> float:
-    """The APE of one episode under the thesis protocol (see the module docstring)."""
+               rng: np.random.Generator, positions: str = "n-1",
+               unseen_prime: str = "last-known", choice: str = "sample") -> float:
+    """The APE of one episode under the thesis protocol (see the module docstring). An
+    item the model never saw cannot be its output, so a step that takes one is an error."""
     index, names = model.index, model.vocab.names
     known = [n if n in index else None for n in episode.sequence]
     if isinstance(model.net, CPTModel):
@@ -59,7 +70,7 @@ def thesis_ape(model: LearnedModel, episode: Episode, repeats: int,
             errors += not (np.isfinite(scores).any() and names[int(np.argmax(scores))]
                            == observed)
         return float(errors)
-    steps = len(episode) - 1
+    steps = len(episode) - (1 if positions == "n-1" else 0)
     if isinstance(model.net, NNModel):
         states = episode_states(episode, pool(episode))
         errors = 0
@@ -75,10 +86,22 @@ def thesis_ape(model: LearnedModel, episode: Episode, repeats: int,
     probabilities = []
     for i in range(steps):
         history = [index[n] for n in known[:i] if n is not None]
+        if unseen_prime == "start" and i > 0 and known[i - 1] is None:
+            history = []  # (primed with the start token)
         logits = model.net.logits(history, prime_only=True) / THESIS_TEMPERATURE
-        p = np.exp(logits - logits.max())
+        if choice == "argmax":
+            p = (logits == logits.max()).astype(float)
+        else:
+            p = np.exp(logits - logits.max())
         probabilities.append(p / p.sum())
     draws = np.array([[rng.choice(len(names), p=p) for p in probabilities]
                       for _ in range(repeats)]).reshape(repeats, steps)
     observed = np.array([index.get(n, -1) for n in episode.sequence[:steps]])
     return float(np.median((draws != observed).sum(axis=1)))
+
+
+def unseen_steps(model: LearnedModel, episode: Episode, positions: str = "n-1") -> int:
+    """Scored steps that take an item the model never saw: errors whatever it predicts
+    (the lowest APE a model restricted to its training vocabulary can reach)."""
+    steps = len(episode) - (1 if positions == "n-1" else 0)
+    return sum(n not in model.index for n in episode.sequence[:steps])
