@@ -264,3 +264,34 @@ def test_without_the_extra_one_line_says_how_to_install(models, tmp_path, blocke
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert expected in done.stdout and "pip install 'cramlite[learn]'" in done.stdout, \
         done.stdout + done.stderr
+
+
+def test_the_thesis_protocol_never_predicts_an_item_the_model_never_saw(tmp_path) -> None:
+    """A CPT that saw plate -> cup -> fork: a step taking the unseen teapot is an error
+    whatever is offered, and an episode of unseen items only is all errors."""
+    from cramlite.learning.scoring import unseen_steps
+
+    path = tmp_path / "cpt.model"
+    save_model(path, {"kind": "cpt", "vocabulary": ["cup", "fork", "plate"],
+                      "split": {"ids": {"train": [], "validation": [], "test": []}},
+                      "data": {"sha256": "abc"}}, sequences=[["plate", "cup", "fork"]] * 3)
+    model = load_model(path)
+
+    def episode(names: tuple[str, ...]) -> Episode:
+        items = tuple(Candidate(n, (float(i), 0.0, 0.0)) for i, n in enumerate(names))
+        return Episode(id="y1", activity="test", sequence=names, items=items,
+                       taken=tuple(range(len(names))), start_positions=((0.0, 0.0, 0.0),)
+                       * len(names))
+
+    mixed = episode(("teapot", "plate"))
+    # "" -> plate (the teapot was taken: wrong), then "" again (the teapot is no history)
+    # -> plate (right)
+    assert thesis_ape(model, mixed, 1, np.random.default_rng(0)) == 1.0
+    alien = episode(("teapot", "kettle"))
+    for seed in range(5):
+        assert thesis_ape(model, alien, 1, np.random.default_rng(seed)) == 2.0
+    assert unseen_steps(model, mixed) == 1 and unseen_steps(model, alien, "n") == 2
+    assert unseen_steps(model, episode(("plate", "teapot"))) == 0  # (n-1: the last is not)
+    # (heldout guesses among the remaining unknown items: sometimes right)
+    heldout = evaluate([alien], f"learned:{path}", metric="expected-ape").scores
+    assert heldout == [0.5]

@@ -43,3 +43,13 @@ def test_reproduce_rebuilds_every_table_on_a_tiny_subset(tmp_path) -> None:
     floor = _row(page, "floor: steps taking an unseen item (n-1)")
     assert floor[1] == "0.00" and float(floor[3]) > 5
     assert re.search(r"\| c \| \d+ % \| \d+ % \|", page)
+
+
+def test_compare_shows_the_published_figure_beside_ours_where_comparable() -> None:
+    thesis = run_cli("compare", "cooking", "--strategies", "opm,nearest", "--protocol",
+                     "thesis", "--repeats", "5")
+    assert thesis.returncode == 0, thesis.stderr
+    assert re.search(r"opm: mean 2\.\d+ \(thesis 2\.78\)", thesis.stdout)
+    assert "nearest: mean" in thesis.stdout and thesis.stdout.count("(thesis") == 1
+    heldout = run_cli("compare", "cooking", "--strategies", "opm,nearest", "--repeats", "5")
+    assert heldout.returncode == 0 and "(thesis" not in heldout.stdout

@@ -86,6 +86,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
         except ValueError as exc:
             raise UserInputError(str(exc), field="--metric") from None
     summary = result["summary"]
+    from cramlite.evaluation.published import published_ape
+
+    for name, row in summary["strategies"].items():
+        row["published"] = published_ape(args.data, name, args.metric, args.protocol)
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         summary["files"] = {"summary": str(out / "compare.json")}
@@ -105,7 +109,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
             test = summary["wilcoxon_vs_first"].get(name)
             versus = "" if test is None else (
                 f"   vs {first}: Wilcoxon W = {test['statistic']}, p = {test['p']:.3g}")
-            print(f"  {name}: mean {row['mean']:.3f}, median {row['median']:.3f}{versus}")
+            thesis = "" if row["published"] is None else f" (thesis {row['published']:.2f})"
+            print(f"  {name}: mean {row['mean']:.3f}{thesis}, median {row['median']:.3f}"
+                  f"{versus}")
         for kind, path in summary.get("files", {}).items():
             print(f"wrote {kind}: {path}")
     return EXIT_OK
