@@ -26,6 +26,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from cramlite.file_limits import checked_file
+
 COLUMNS = ["setup", "setup_hash", "plan", "strategy", "code_hash", "given_order", "backend",
            "inject", "trial",
            "seed", "batch_seed", "success", "order", "failures", "failure_types", "injected",
@@ -64,6 +66,7 @@ class TrialStore:
         """The complete records (a row being written, or cut by a kill, is not one)."""
         if not self.path.exists():
             return []
+        checked_file(self.path, "results")
         with self.path.open("rb") as handle:
             data = handle.read()
         text = data[:complete_records_end(data)].decode("utf-8", errors="replace")
@@ -108,6 +111,7 @@ class TrialStore:
         """Cut the file after its last complete record (after a kill or a full disk)."""
         if not self.path.exists():
             return
+        checked_file(self.path, "results")
         with self.path.open("rb") as handle:
             data = handle.read()
         end = complete_records_end(data)

@@ -7,6 +7,7 @@ import sys
 
 from cramlite.cli.common import EXIT_OK, command_help, strategy_checked
 from cramlite.errors import UserInputError
+from cramlite.file_limits import checked_file
 
 ORDER_DESCRIPTION = """\
 Answers ordering requests: which item to fetch next, the cost of each, and the whole
@@ -72,6 +73,7 @@ def cmd_order(args: argparse.Namespace) -> int:
         if args.request == "-":
             data = sys.stdin.buffer.read(MAX_REQUEST_BYTES + 1)
         else:
+            checked_file(args.request, "request")
             with open(args.request, "rb") as handle:
                 data = handle.read(MAX_REQUEST_BYTES + 1)
     except OSError as exc:

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from cramlite.errors import UserInputError
+from cramlite.file_limits import checked_file
 from cramlite.strategies.candidates import Candidate, Position
 
 REQUIRED_COLUMNS = ("ID", "sequence", "coordinates", "start_coordinates")
@@ -178,12 +179,13 @@ def iter_rows(path: str | Path) -> Iterator[dict[str, str]]:
     path = Path(path)
     if path.is_dir():
         raise DataError("expected a CSV file, got a folder", source=str(path))
+    checked_file(path, "data", DataError)
     try:
         raw = path.read_bytes()
     except OSError as exc:
         raise DataError(f"cannot read file ({exc.strerror})", source=str(path)) from None
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8-sig")  # (a byte-order mark, as spreadsheets write, is fine)
     except UnicodeDecodeError as exc:
         line = raw[:exc.start].count(b"\n") + 1
         raise DataError(f"expected UTF-8 text, got byte 0x{raw[exc.start]:02x}",

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from cramlite.errors import UserInputError
+from cramlite.file_limits import check_size, checked_file
 from cramlite.learning.encoding import Vocabulary, nn_features
 from cramlite.learning.models import KINDS, CPTModel, NNModel, RNNModel
 from cramlite.strategies.candidates import Candidate
@@ -87,6 +88,7 @@ def load_model(path: str | Path) -> LearnedModel:
                              source=str(path)) from None
     if not path.is_file():
         raise ModelFileError("expected a model file, got a folder", source=str(path))
+    checked_file(path, "model", ModelFileError)
     return _load(str(path.resolve()), stat.st_mtime_ns, stat.st_size)
 
 
@@ -97,6 +99,9 @@ def _load(path: str, mtime_ns: int, size: int) -> LearnedModel:
 
     try:
         with zipfile.ZipFile(path) as archive:
+            for entry in archive.infolist():  # (before anything is extracted)
+                check_size(entry.file_size, "model entry", f"{path}: {entry.filename}",
+                           ModelFileError)
             names = set(archive.namelist())
             if "model.json" not in names:
                 raise fail("not a cramlite model file (no model.json inside); expected a file "

@@ -20,6 +20,7 @@ from typing import Any
 from cramlite.bench.labels import by_backend, several_backends
 from cramlite.bench.specs import FIXED_ORDER, trace_file
 from cramlite.errors import UserInputError
+from cramlite.file_limits import checked_file
 
 #: Columns the report cannot do without; the others default to empty.
 REQUIRED = ("setup", "strategy", "trial", "success", "order")
@@ -96,6 +97,7 @@ def read_folder(path: str | Path, running: bool | None = None) -> BenchFolder:
 def _metadata(path: Path) -> dict[str, Any]:
     if not path.exists():
         return {}
+    checked_file(path, "results")
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
@@ -110,6 +112,7 @@ def _rows(path: Path) -> list[dict[str, Any]]:
     if not path.exists():
         return []
     src = str(path)
+    checked_file(path, "results")
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError:

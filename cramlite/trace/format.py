@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from cramlite.errors import UserInputError
+from cramlite.file_limits import checked_file
 
 TRACE_FORMAT = "cramlite-trace/2"
 #: The formats read (a /1 trace still replays and checks).
@@ -132,6 +133,7 @@ def read_trace(path: str | Path) -> Trace:
     """Read and validate a trace; a problem raises TraceError naming the line."""
     path = Path(path)
     src = str(path)
+    checked_file(path, "trace", TraceError)
     try:
         handle = path.open(encoding="utf-8")
     except OSError as exc:
