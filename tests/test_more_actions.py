@@ -5,6 +5,7 @@ PickAndPlaceAction picks up and puts down from where the robot stands."""
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -13,6 +14,7 @@ from cramlite.designators import (
     GraspFailed,
     LookAtAction,
     MotionPlanningFailed,
+    MoveTorsoAction,
     NavigateAction,
     ParkArmsAction,
     PickAndPlaceAction,
@@ -87,3 +89,24 @@ def test_detect_does_not_see_the_cup_behind_the_cupboard_door_and_sees_it_open()
         assert noisy[0] == noisy[1] != seen["cup"][0]  # (seeded: the same noise again)
         LookAtAction((-0.85, 1.2, 0.9)).perform(ctx)  # the island, behind the robot's left
         assert "cup" not in DetectAction().perform(ctx)  # (out of view)
+
+
+def test_look_at_turns_the_head_the_short_way_across_its_back() -> None:
+    """Looking behind on one side and then on the other: the pan's correction passes
+    pi, and the equivalent angle within the joint's limits is taken (not a refusal)."""
+    with simulated_robot(load_setup("v1"), backend="kinematic") as ctx:
+        ParkArmsAction().perform(ctx)
+        x, y, yaw = ctx.modules.state.belief.base
+        behind = [(x + 1.5 * math.cos(yaw + a), y + 1.5 * math.sin(yaw + a), 1.2)
+                  for a in (math.radians(165), math.radians(-165))]
+        LookAtAction(behind[0]).perform(ctx)
+        assert ctx.modules.joint_positions([PAN])[PAN] > 2.5
+        point = LookAtAction(behind[1]).perform(ctx)
+        assert ctx.modules.joint_positions([PAN])[PAN] < -2.5
+        assert gaze_error_deg(ctx, point) < 0.1
+        # from there, a point close by on the left (a turn of nearly 2 rad with the
+        # camera off the pan axis) is met to within a hundredth of a degree
+        MoveTorsoAction(0.25).perform(ctx)
+        near = (x + 0.4 * math.cos(yaw + math.pi / 2), y + 0.4 * math.sin(yaw + math.pi / 2),
+                0.7)
+        assert gaze_error_deg(ctx, LookAtAction(near).perform(ctx)) < 0.01

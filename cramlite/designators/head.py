@@ -3,8 +3,9 @@ timed trajectory, as every other joint motion).
 
 The gaze is the x axis of `high_def_frame`, the head's high-resolution camera (the
 narrow-stereo and Kinect frames sit beside it on the same plate). Pan turns about the
-vertical, tilt about the pan link's y axis (positive: looking down), so two steps of
-"turn the gaze onto the point from where it is" converge to within micro-radians.
+vertical, tilt about the pan link's y axis (positive: looking down), so a few steps of
+"turn the gaze onto the point from where it is" converge to within micro-radians (two for
+a glance, more for a half turn).
 """
 
 from __future__ import annotations
@@ -38,12 +39,17 @@ def look_at_joints(ctx: RobotContext, point: tuple[float, float, float]) -> dict
     """Head pan and tilt that point the gaze at `point` (within the joints' limits; a
     MotionPlanningFailed if the point is out of the head's reach, e.g. below its chin)."""
     joints = ctx.scene.joint_positions([PAN, TILT])
-    for _ in range(3):
-        frame = ctx.scene.link_matrix(GAZE_FRAME, joints)
+    for _ in range(12):  # (a half turn takes more steps than a glance: the camera sits
+        frame = ctx.scene.link_matrix(GAZE_FRAME, joints)  # off the pan axis)
         local = frame[:3, :3].T @ (np.asarray(point, dtype=float) - frame[:3, 3])
-        joints = {PAN: joints[PAN] + math.atan2(local[1], local[0]),
-                  TILT: joints[TILT] + math.atan2(-local[2], math.hypot(local[0], local[1]))}
+        step = (math.atan2(local[1], local[0]),
+                math.atan2(-local[2], math.hypot(local[0], local[1])))
+        joints = {PAN: joints[PAN] + step[0], TILT: joints[TILT] + step[1]}
+        if max(abs(step[0]), abs(step[1])) < 1e-7:
+            break
     limits = ctx.scene.robot.joints
+    joints[PAN] = _wrapped_into(joints[PAN], limits[PAN].lower, limits[PAN].upper,
+                                near=ctx.scene.joint_positions([PAN])[PAN])
     for name, value in joints.items():
         if not limits[name].lower - 1e-9 <= value <= limits[name].upper + 1e-9:
             raise MotionPlanningFailed(
@@ -51,6 +57,15 @@ def look_at_joints(ctx: RobotContext, point: tuple[float, float, float]) -> dict
                 f"{name} would be {value:.2f} rad, beyond [{limits[name].lower:.2f}, "
                 f"{limits[name].upper:.2f}]")
     return joints
+
+
+def _wrapped_into(angle: float, lower: float, upper: float, near: float) -> float:
+    """The angle equivalent to `angle` (a multiple of 2 pi away) within [lower, upper]
+    that is nearest `near`, or `angle` itself if none is (the caller reports it): the
+    pan's correction accumulates, so a gaze behind the head can come out a turn away."""
+    candidates = [angle + 2 * math.pi * turns for turns in range(-2, 3)]
+    within = [a for a in candidates if lower - 1e-9 <= a <= upper + 1e-9]
+    return min(within, key=lambda a: abs(a - near)) if within else angle
 
 
 @dataclass
