@@ -45,6 +45,7 @@ from cramlite.designators.motions import (
     MoveGripperMotion,
     MoveMotion,
     MoveTorsoMotion,
+    gripper_joints,
 )
 from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription, as_object
 from cramlite.designators.tasks import ActionDesignator
@@ -68,15 +69,17 @@ FOOTPRINT_SPACING_M = 0.01
 class ParkArmsAction(ActionDesignator):
     """Get the arms ready for driving, one after the other: an empty arm tucked (PyCRAM's
     park pose), an arm holding something in the carry pose (the object upright in front
-    of the robot, above the counters)."""
+    of the robot, above the counters). Returns the arms' joint positions where they
+    ended (arm -> joint -> rad)."""
 
     arm: str = "both"  #: "left", "right" or "both"
     #: Park while the base drives next (one combined motion, checked as one; alone first
     #: where the combination collides or no drive comes next).
     while_driving: bool = False
 
-    def execute(self, ctx: RobotContext) -> None:
-        for arm in ARMS if self.arm == "both" else (self.arm,):
+    def execute(self, ctx: RobotContext) -> dict[str, dict[str, float]]:
+        arms = ARMS if self.arm == "both" else (self.arm,)
+        for arm in arms:
             target = dict(PARK_JOINTS[arm])
             holding = ctx.holding.get(arm)
             if holding is not None:
@@ -89,6 +92,7 @@ class ParkArmsAction(ActionDesignator):
             now = ctx.scene.joint_positions(list(target))
             if any(abs(wrap_angle(now[n] - v)) > PARKED_TOLERANCE_RAD for n, v in target.items()):
                 MoveArmJointsMotion(dict(target), while_driving=self.while_driving).perform(ctx)
+        return {arm: ctx.scene.joint_positions(list(PARK_JOINTS[arm])) for arm in arms}
 
 
 def _tool_at(ctx: RobotContext, arm: str, joints: dict[str, float],
@@ -104,13 +108,15 @@ def _tool_at(ctx: RobotContext, arm: str, joints: dict[str, float],
 @dataclass
 class MoveTorsoAction(ActionDesignator):
     """Raise or lower the torso; `while_driving`: while the base drives next (one
-    combined motion, checked as one; alone first where the combination collides)."""
+    combined motion, checked as one; alone first where the combination collides).
+    Returns the torso's height where it ended (m)."""
 
     height_m: float  #: torso lift in metres (0 to 0.31 on the PR2)
     while_driving: bool = False
 
-    def execute(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> float:
         MoveTorsoMotion(self.height_m, self.while_driving).perform(ctx)
+        return ctx.scene.joint_positions([TORSO_JOINT])[TORSO_JOINT]
 
     def validate(self, ctx: RobotContext, result: object = None) -> None:
         torso = ctx.scene.joint_positions([TORSO_JOINT])[TORSO_JOINT]
@@ -667,12 +673,12 @@ _OUTLINES: ProcessCache[dict[float, np.ndarray]] = ProcessCache(5_000)
 class SetGripperAction(ActionDesignator):
     """Open or close an empty gripper (its fingers along a checked, timed trajectory). A
     gripper holding something is refused: letting go is PlaceAction's (where it lands is
-    checked there)."""
+    checked there). Returns the gripper's joint positions where they ended (rad)."""
 
     arm: str  #: "left" or "right"
     state: str  #: "open" or "close"
 
-    def execute(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> dict[str, float]:
         if self.arm not in ARMS or self.state not in ("open", "close"):
             raise ValueError(f"SetGripperAction: expected arm in {ARMS} and state 'open' or "
                              f"'close', got {self.arm!r} and {self.state!r}")
@@ -681,10 +687,9 @@ class SetGripperAction(ActionDesignator):
             raise GraspFailed(f"the {self.arm} gripper holds {holding.obj}: put it down with "
                               "PlaceAction", obj=holding.obj)
         MoveGripperMotion(self.arm, self.state).perform(ctx)
+        return ctx.scene.joint_positions(list(gripper_joints(self.arm, self.state)))
 
     def validate(self, ctx: RobotContext, result: object = None) -> None:
-        from cramlite.designators.motions import gripper_joints
-
         wanted = gripper_joints(self.arm, self.state)
         now = ctx.scene.joint_positions(list(wanted))
         off = max(abs(now[n] - v) for n, v in wanted.items())

@@ -459,13 +459,15 @@ def _let_go(ctx: RobotContext, container: Container, access: AccessPose) -> None
 
 @dataclass
 class OpenAction(ActionDesignator):
-    """Open a drawer or a cupboard door: grasp its handle and pull it open."""
+    """Open a drawer or a cupboard door: grasp its handle and pull it open. Returns the
+    container's joint position where it ended (m for a drawer, rad for a door)."""
 
     container: str  #: the container's name (see the world's containers)
     arms: Sequence[str] | None = None  #: arms to try (default: the free ones)
 
-    def execute(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> float:
         _move_container(ctx, self.container, "open", self.arms)
+        return ctx.scene.world_joint_positions()[_container(ctx, self.container).joint]
 
     def validate(self, ctx: RobotContext, result: object = None) -> None:
         if not ctx.scene.is_open(_container(ctx, self.container)):
@@ -474,13 +476,15 @@ class OpenAction(ActionDesignator):
 
 @dataclass
 class CloseAction(ActionDesignator):
-    """Close a drawer or a cupboard door: grasp its handle and push it shut."""
+    """Close a drawer or a cupboard door: grasp its handle and push it shut. Returns the
+    container's joint position where it ended (m for a drawer, rad for a door)."""
 
     container: str  #: the container's name
     arms: Sequence[str] | None = None  #: arms to try (default: the free ones)
 
-    def execute(self, ctx: RobotContext) -> None:
+    def execute(self, ctx: RobotContext) -> float:
         _move_container(ctx, self.container, "close", self.arms)
+        return ctx.scene.world_joint_positions()[_container(ctx, self.container).joint]
 
     def validate(self, ctx: RobotContext, result: object = None) -> None:
         container = _container(ctx, self.container)
