@@ -13,9 +13,10 @@ from cramlite.cli.common import (
     comma_list,
     command_help,
     int_in_range,
-    non_negative_int,
     positive_float,
-    positive_int,
+    seed_int,
+    whole_number,
+    workers_int,
 )
 from cramlite.errors import UserInputError
 from cramlite.plan_names import PLAN_HELP
@@ -306,10 +307,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     bench.add_argument("--trials", type=int_in_range(1, f"a whole number in [1, {MAX_TRIALS}]",
                                                      MAX_TRIALS), default=10,
                        help="trials per setup and strategy (default 10)")
-    bench.add_argument("--seed", type=non_negative_int, default=0,
+    bench.add_argument("--seed", type=seed_int, default=0,
                        help="batch seed; each trial's seed derives from it, the setup and "
                             "the trial index (default 0)")
-    bench.add_argument("--workers", type=positive_int, default=None,
+    bench.add_argument("--workers", type=workers_int, default=None,
                        help="local worker processes (default: number of CPUs, at most "
                             f"{MAX_WORKERS_PER_CPU} per CPU); with --scheduler, half the "
                             "number of trials kept in flight (default: the cluster's number "
@@ -328,7 +329,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     bench.add_argument("--all-orders", action="store_true",
                        help="add every permutation of each setup's items as fixed-order "
                             f"trials (n! per setup; at most {MAX_ALL_ORDERS_ITEMS} items)")
-    bench.add_argument("--random-setups", type=positive_int, default=None, metavar="N",
+    bench.add_argument("--random-setups", type=whole_number(1, 100_000), default=None,
+                       metavar="N",
                        help="add N random setups (saved under OUT/setups)")
     bench.add_argument("--plan", default="set-table", help=PLAN_HELP)
     bench.add_argument("--reference", metavar="STRATEGY",

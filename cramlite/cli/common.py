@@ -133,19 +133,43 @@ def int_in_range(minimum: int, wording: str, maximum: int | None = None,
     return parse
 
 
+def whole_number(minimum: int, maximum: int) -> Callable[[str], int]:
+    """An argparse type: a whole number in [minimum, maximum]."""
+    return int_in_range(minimum, f"a whole number in [{minimum}, {maximum}]", maximum)
+
+
 def int_at_least(minimum: int, wording: str) -> Callable[[str], int]:
     return int_in_range(minimum, wording)
 
 
-def positive_float(text: str) -> float:
-    """An argparse type: a finite number > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not math.isfinite(value) or value <= 0:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds > 0, got {text!r}")
-    return value
+def float_in_range(minimum: float, maximum: float, wording: str,
+                   open_minimum: bool = False) -> Callable[[str], float]:
+    """An argparse type: a finite number in [minimum, maximum] ((minimum, maximum] with
+    `open_minimum`); the message names what was expected."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        low_ok = value > minimum if open_minimum else value >= minimum
+        if not (math.isfinite(value) and low_ok and value <= maximum):
+            raise argparse.ArgumentTypeError(f"expected {wording}, got {text!r}")
+        return value
+    return parse
+
+
+#: Upper bounds of numeric options: far beyond any real use, low enough that no option
+#: alone can make cramlite allocate gigabytes or run for years.
+MAX_SEED = 2**64 - 1
+MAX_REPEATS = 100_000
+MAX_EPOCHS = 100_000
+MAX_EPISODES = 1_000_000
+MAX_WORKERS = 1024
+MAX_TIMEOUT_S = 7 * 24 * 3600.0
+
+#: A finite number of seconds > 0 (up to a week).
+positive_float = float_in_range(0.0, MAX_TIMEOUT_S, f"a number of seconds > 0 and <= "
+                                f"{MAX_TIMEOUT_S:g}", open_minimum=True)
 
 
 def image_path(text: str) -> str:
@@ -158,6 +182,11 @@ def image_path(text: str) -> str:
 
 positive_int = int_at_least(1, "a positive integer")
 non_negative_int = int_at_least(0, "a whole number >= 0")
+seed_int = int_in_range(0, "a seed: a whole number in [0, 2^64 - 1]", MAX_SEED)
+repeats_int = int_in_range(1, f"a whole number in [1, {MAX_REPEATS}]", MAX_REPEATS)
+epochs_int = int_in_range(1, f"a whole number in [1, {MAX_EPOCHS}]", MAX_EPOCHS)
+episodes_int = int_in_range(1, f"a whole number in [1, {MAX_EPISODES}]", MAX_EPISODES)
+workers_int = int_in_range(1, f"a whole number in [1, {MAX_WORKERS}]", MAX_WORKERS)
 
 
 def writable_file(text: str, option: str) -> None:

@@ -12,11 +12,13 @@ from pathlib import Path
 
 from cramlite.cli.common import (
     EXIT_OK,
-    non_negative_int,
+    episodes_int,
     parse_params,
-    positive_int,
     progress_bar,
+    repeats_int,
+    seed_int,
     strategy_checked,
+    workers_int,
     writable_file,
     writable_folder,
 )
@@ -224,9 +226,9 @@ def _add_data_arguments(p: argparse.ArgumentParser, metrics: tuple[str, ...]) ->
     p.add_argument("--form", default="power", choices=("power", "additive", "product"),
                    help="functional form (Eq. 3.1-3.3)")
     add_protocol_argument(p)
-    p.add_argument("--repeats", type=positive_int, default=100,
+    p.add_argument("--repeats", type=repeats_int, default=100,
                    help="repeats of the random tie-breaks (default 100)")
-    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
+    p.add_argument("--seed", type=seed_int, default=0, help="random seed")
     p.add_argument("--on-bad-row", choices=("fail", "skip"), default="fail",
                    help="a row that cannot be used: stop (default) or skip and report it")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -258,7 +260,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                          help="grid mid k independently (0.1-1.0) instead of strong k + 0.1")
     fit_cmd.add_argument("--out", default="fit-results",
                          help="folder for surface.csv, fit.json, error_by_projection.png")
-    fit_cmd.add_argument("--workers", type=positive_int, default=os.cpu_count() or 1,
+    fit_cmd.add_argument("--workers", type=workers_int, default=os.cpu_count() or 1,
                          help="processes for strategies scored point by point (default: "
                               "all cores); opm, nearest, opm-2step and optimal under APE are "
                               "vectorised over the grid")
@@ -278,10 +280,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     sim.add_argument("--temperature", type=float, default=DEFAULT_TEMPERATURE,
                      help="softmax over costs: P(item) ~ exp(-cost / T); 0 takes the "
                           f"lowest cost (default {DEFAULT_TEMPERATURE})")
-    sim.add_argument("--episodes", type=positive_int,
+    sim.add_argument("--episodes", type=episodes_int,
                      help="how many (default: as many as --like has; the j-th copies the "
                           "task of episode j modulo that)")
-    sim.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
+    sim.add_argument("--seed", type=seed_int, default=0, help="random seed")
     sim.add_argument("--out", default="simulated.csv", help="the CSV to write")
     sim.add_argument("--json", action="store_true", help="print one JSON object")
     sim.set_defaults(func=cmd_simulate)

@@ -8,9 +8,10 @@ from cramlite.cli.common import (
     EXIT_OK,
     comma_list,
     command_help,
-    non_negative_int,
-    positive_int,
+    epochs_int,
     progress_bar,
+    repeats_int,
+    seed_int,
     strategy_checked,
     writable_file,
     writable_folder,
@@ -127,12 +128,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     train.add_argument("--model", required=True, choices=MODEL_KINDS,
                        help="cpt: CPT+; rnn: GRU on item sequences; nn: context network")
     train.add_argument("--out", required=True, help="the model file to write")
-    train.add_argument("--seed", type=non_negative_int, default=0,
+    train.add_argument("--seed", type=seed_int, default=0,
                        help="seed of the split and of training (default 0)")
     train.add_argument("--split", default="0.7,0.15,0.15",
                        help="train,validation,test fractions of the episodes (default "
                             "0.7,0.15,0.15; stratified by data source)")
-    train.add_argument("--epochs", type=positive_int, default=300,
+    train.add_argument("--epochs", type=epochs_int, default=300,
                        help="most epochs (early stopping on validation loss, patience 5)")
     train.add_argument("--json", action="store_true", help="print the report as JSON")
     train.set_defaults(func=cmd_train)
@@ -146,9 +147,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     cmp.add_argument("--metric", default="ape", choices=METRICS,
                      help="ape (default), expected-ape, edit, edit-unrestricted")
     add_protocol_argument(cmp)
-    cmp.add_argument("--repeats", type=positive_int, default=100,
+    cmp.add_argument("--repeats", type=repeats_int, default=100,
                      help="repeats of random choices (default 100)")
-    cmp.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
+    cmp.add_argument("--seed", type=seed_int, default=0, help="random seed")
     cmp.add_argument("--out", help="folder for compare.json and error_distributions.png")
     cmp.add_argument("--json", action="store_true", help="print one JSON object")
     cmp.set_defaults(func=cmd_compare)

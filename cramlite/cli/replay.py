@@ -12,6 +12,7 @@ from cramlite.cli.common import (
     Parser,
     chosen_backend,
     command_help,
+    float_in_range,
     writable_file,
 )
 from cramlite.errors import UserInputError
@@ -107,9 +108,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     replay.add_argument("--out", help="write an animated GIF here (headless)")
     replay.add_argument("--backend", help="whose renderer draws the GIF (and whose window "
                                           "--gui opens): " + BACKEND_HELP)
-    replay.add_argument("--fps", type=positive_float, default=10.0,
+    replay.add_argument("--fps", default=10.0,
+                        type=float_in_range(0, 120, "frames per second > 0 and <= 120",
+                                            open_minimum=True),
                         help="frames per second of robot time (default 10)")
-    replay.add_argument("--speed", type=positive_float, default=1.0,
+    replay.add_argument("--speed", default=1.0,
+                        type=float_in_range(0.01, 1000, "a speed-up from 0.01 to 1000"),
                         help="play this many times faster than the robot moved (default 1)")
     replay.add_argument("--width", type=image_side, default=480, help="GIF width (default 480)")
     replay.add_argument("--height", type=image_side, default=360,
@@ -124,6 +128,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                              "fingertips at most 2 mm inside what they hold, upright items "
                              "within their tilt, base accelerations within the header's "
                              "limits, items at their targets within 10 degrees of yaw")
-    replay.add_argument("--tolerance-cm", type=positive_float, default=1.0,
+    replay.add_argument("--tolerance-cm", default=1.0,
+                        type=float_in_range(0, 100, "centimetres > 0 and <= 100",
+                                            open_minimum=True),
                         help="penetration allowed by --check (default 1 cm)")
     replay.set_defaults(func=cmd_replay)

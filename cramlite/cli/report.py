@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from cramlite.cli.common import EXIT_OK, command_help, non_negative_int
+from cramlite.cli.common import EXIT_OK, command_help, whole_number
 
 
 def speed(text: str) -> float:
@@ -49,7 +49,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "malformed file (named).")
     report.add_argument("folder", metavar="DIR",
                         help="a results folder written by `cramlite bench --out DIR`")
-    report.add_argument("--max-replays", type=non_negative_int, default=DEFAULT_MAX_REPLAYS,
+    report.add_argument("--max-replays", type=whole_number(0, 10_000),
+                        default=DEFAULT_MAX_REPLAYS,
                         metavar="N",
                         help=f"draw at most N replay GIFs of traced trials (default "
                              f"{DEFAULT_MAX_REPLAYS}; 0: none); each takes a few seconds and "

@@ -9,8 +9,11 @@ from cramlite.cli.common import (
     EXIT_OK,
     comma_list,
     command_help,
-    non_negative_int,
-    positive_int,
+    episodes_int,
+    epochs_int,
+    repeats_int,
+    seed_int,
+    whole_number,
     writable_folder,
 )
 
@@ -47,16 +50,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "three activities with an ablation, parameter recovery), "
                                    "training included, into OUT/reproduce.md and .html.")
     p.add_argument("--out", default="reproduce", help="folder for the page and the models")
-    p.add_argument("--episodes", type=positive_int,
+    p.add_argument("--episodes", type=episodes_int,
                    help="at most this many episodes of each data set (a quick look)")
     p.add_argument("--setups", default="v1,v2,v3,v4,v5", help="robot setups (default v1-v5)")
-    p.add_argument("--epochs", type=positive_int, default=300,
+    p.add_argument("--epochs", type=epochs_int, default=300,
                    help="most training epochs (early stopping; default 300)")
-    p.add_argument("--recovery-sets", type=positive_int, default=20,
+    p.add_argument("--recovery-sets", type=whole_number(1, 10_000), default=20,
                    help="generating parameter sets of the recovery (default 20)")
-    p.add_argument("--recovery-seeds", type=positive_int, default=3,
+    p.add_argument("--recovery-seeds", type=whole_number(1, 100), default=3,
                    help="seeds per generating set (default 3)")
-    p.add_argument("--repeats", type=positive_int, default=100,
+    p.add_argument("--repeats", type=repeats_int, default=100,
                    help="repeats of random choices (default 100)")
-    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
+    p.add_argument("--seed", type=seed_int, default=0, help="random seed")
     p.set_defaults(func=cmd_reproduce)

@@ -13,8 +13,8 @@ from cramlite.cli.common import (
     command_help,
     image_path,
     int_in_range,
-    non_negative_int,
     parse_params,
+    seed_int,
     strategy_checked,
     writable_file,
 )
@@ -239,7 +239,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                           "(k in [0, 10], c in (0, 1000]; defaults: the source's best fit)")
     run.add_argument("--dims", default="xy", choices=list(DIMS),
                      help="projection the strategy measures distance in (default xy)")
-    run.add_argument("--seed", type=non_negative_int, default=0,
+    run.add_argument("--seed", type=seed_int, default=0,
                      help="random seed of the trial (default 0)")
     run.add_argument("--order", metavar="A,B,...",
                      help="with --strategy baseline: fetch in this order instead of the "
