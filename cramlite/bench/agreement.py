@@ -10,11 +10,12 @@ item within `tolerance_m` of where the first backend left it.
 
 from __future__ import annotations
 
-import json
 import math
 from collections import defaultdict
 from collections.abc import Sequence
 from typing import Any
+
+from cramlite.safe_json import parse_json
 
 #: Items further apart than this (m) between two backends' ends of a trial: they disagree.
 AGREEMENT_TOLERANCE_M = 0.01
@@ -26,7 +27,7 @@ def _mapping(row: dict[str, Any], column: str) -> dict[str, Any]:
     value = row.get(column) or {}
     if isinstance(value, str):
         try:
-            value = json.loads(value)
+            value = parse_json(value)
         except ValueError:
             return {}
     return value if isinstance(value, dict) else {}

@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from cramlite.file_limits import checked_file
+from cramlite.safe_json import parse_json
 
 COLUMNS = ["setup", "setup_hash", "plan", "strategy", "code_hash", "given_order", "backend",
            "inject", "trial",
@@ -144,7 +145,7 @@ class TrialStore:
         """The format of the results in the folder (1: before it was recorded)."""
         meta = self.folder / "metadata.json"
         try:
-            value = json.loads(meta.read_text(encoding="utf-8")).get("results_format", 1)
+            value = parse_json(meta.read_text(encoding="utf-8")).get("results_format", 1)
         except (OSError, ValueError, AttributeError):
             return 1
         return value if isinstance(value, int) else 1
@@ -165,8 +166,8 @@ class TrialStore:
         meta = self.folder / "metadata.json"
         if meta.exists():
             try:
-                runs = json.loads(meta.read_text()).get("runs", [])
-            except (json.JSONDecodeError, AttributeError):
+                runs = parse_json(meta.read_text(encoding="utf-8")).get("runs", [])
+            except (OSError, ValueError, AttributeError):
                 runs = []
         (self.folder / "metadata.json").write_text(json.dumps({**data, "runs": runs + [data]},
                                                               indent=2))

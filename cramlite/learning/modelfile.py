@@ -21,6 +21,7 @@ from cramlite.errors import UserInputError
 from cramlite.file_limits import check_size, checked_file
 from cramlite.learning.encoding import Vocabulary, nn_features
 from cramlite.learning.models import KINDS, CPTModel, NNModel, RNNModel
+from cramlite.safe_json import parse_json
 from cramlite.strategies.candidates import Candidate
 
 FORMAT = "cramlite-model"
@@ -106,7 +107,7 @@ def _load(path: str, mtime_ns: int, size: int) -> LearnedModel:
             if "model.json" not in names:
                 raise fail("not a cramlite model file (no model.json inside); expected a file "
                            "written by `cramlite train`")
-            meta = json.loads(archive.read("model.json").decode("utf-8"))
+            meta = parse_json(archive.read("model.json").decode("utf-8"))
             if not isinstance(meta, dict) or meta.get("format") != FORMAT:
                 raise fail(f"expected {FORMAT!r}", "format")
             if meta.get("format_version") != FORMAT_VERSION:
@@ -131,7 +132,7 @@ def _load(path: str, mtime_ns: int, size: int) -> LearnedModel:
                 raise fail("expected the episode IDs of the split (ids.test: a list of IDs)",
                            "split")
             if kind == "cpt":
-                sequences = json.loads(archive.read("sequences.json").decode("utf-8"))
+                sequences = parse_json(archive.read("sequences.json").decode("utf-8"))
                 net: RNNModel | NNModel | CPTModel = CPTModel(sequences, vocab)
             else:
                 with np.load(io.BytesIO(archive.read("weights.npz")),

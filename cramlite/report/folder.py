@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import contextlib
 import csv
-import json
 import math
 import os
 from dataclasses import dataclass, field
@@ -21,6 +20,7 @@ from cramlite.bench.labels import by_backend, several_backends
 from cramlite.bench.specs import FIXED_ORDER, trace_file
 from cramlite.errors import UserInputError
 from cramlite.file_limits import checked_file
+from cramlite.safe_json import JSONInputError, parse_json
 
 #: Columns the report cannot do without; the others default to empty.
 REQUIRED = ("setup", "strategy", "trial", "success", "order")
@@ -99,9 +99,10 @@ def _metadata(path: Path) -> dict[str, Any]:
         return {}
     checked_file(path, "results")
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise UserInputError(f"not valid JSON ({type(exc).__name__}); expected the metadata "
+        data = parse_json(path.read_text(encoding="utf-8"))
+    except (JSONInputError, UnicodeDecodeError) as exc:
+        raise UserInputError(f"{exc if isinstance(exc, JSONInputError) else 'not UTF-8'}; "
+                             "expected the metadata "
                              "`cramlite bench` writes", source=str(path)) from None
     if not isinstance(data, dict):
         raise UserInputError("expected a JSON object", source=str(path))
@@ -133,8 +134,8 @@ def _rows(path: Path) -> list[dict[str, Any]]:
         for column, kind in JSON_COLUMNS.items():
             cell = row.get(column) or ("[]" if kind is list else "{}")
             try:
-                value = json.loads(cell)
-            except json.JSONDecodeError:
+                value = parse_json(cell)
+            except JSONInputError:
                 value = None
             if not isinstance(value, kind):
                 raise UserInputError(f"{column}: expected a JSON {kind.__name__}, got "

@@ -31,6 +31,7 @@ from typing import IO, Any
 
 from cramlite.errors import UserInputError
 from cramlite.file_limits import checked_file
+from cramlite.safe_json import JSONInputError, parse_json
 
 TRACE_FORMAT = "cramlite-trace/2"
 #: The formats read (a /1 trace still replays and checks).
@@ -152,9 +153,9 @@ def read_trace(path: str | Path) -> Trace:
                 if not line.strip():
                     raise fail("empty line; expected one JSON object per line")
                 try:
-                    record = json.loads(line)
-                except json.JSONDecodeError as exc:
-                    raise fail(f"not valid JSON ({exc.msg})") from None
+                    record = parse_json(line)
+                except JSONInputError as exc:
+                    raise fail(str(exc)) from None
                 if not isinstance(record, dict):
                     raise fail("expected a JSON object")
                 if header is None:
