@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import csv
+import io
 import json
+import re
 import zipfile
 from pathlib import Path
 
@@ -192,6 +194,45 @@ def test_model_with_bad_metadata_is_refused_when_it_loads(models, tmp_path, fiel
         load_model(path)
     result = run_cli("evaluate", "table-setting", "--strategy", f"learned:{path}")
     assert result.returncode == 2 and "Traceback" not in result.stderr
+
+
+def _tampered(models, tmp_path, kind: str, arrays=None, sequences=None) -> Path:
+    """A copy of a trained model file with its weights or sequences replaced."""
+    path = tmp_path / f"tampered-{kind}.model"
+    with zipfile.ZipFile(models[kind]) as old, zipfile.ZipFile(path, "w") as new:
+        new.writestr("model.json", old.read("model.json"))
+        if kind == "cpt":
+            new.writestr("sequences.json", json.dumps(sequences))
+        else:
+            with np.load(io.BytesIO(old.read("weights.npz"))) as data:
+                weights = [data[f"arr_{i}"] for i in range(len(data.files))]
+            buffer = io.BytesIO()
+            np.savez(buffer, *arrays(weights))
+            new.writestr("weights.npz", buffer.getvalue())
+    return path
+
+
+@pytest.mark.parametrize("kind, arrays, sequences, expected", [
+    ("nn", lambda w: w[:-1], None, "arrays; expected a kernel and a bias per layer"),
+    ("nn", lambda w: [w[0][:-1], *w[1:]], None, "expected numbers of shape"),
+    ("nn", lambda w: [*w[:2], w[2].T, *w[3:]], None, "expected numbers of shape"),
+    ("nn", lambda w: [w[0] * np.nan, *w[1:]], None, "NaN or infinite"),
+    ("rnn", lambda w: w[:5], None, "expected the GRU's 6"),
+    ("rnn", lambda w: [w[0][:2], *w[1:]], None, "rows for"),
+    ("rnn", lambda w: [*w[:3], w[3][0], *w[4:]], None, "expected numbers of shape"),
+    ("cpt", None, {"a": 1}, "sequences.json: expected a non-empty list of sequences"),
+    ("cpt", None, [["cup", 3]], "sequences.json: expected"),
+    ("cpt", None, [["no-such-item"]], "sequences.json: expected"),
+    ("cpt", None, [], "sequences.json: expected"),
+])
+def test_a_model_file_with_wrong_weights_or_sequences_is_refused(
+        models, tmp_path, kind, arrays, sequences, expected) -> None:
+    path = _tampered(models, tmp_path, kind, arrays, sequences)
+    with pytest.raises(ModelFileError, match=re.escape(expected)):
+        load_model(path)
+    result = run_cli("run", "v1", "--backend", "kinematic", "--strategy", f"learned:{path}")
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2 and len(lines) == 1 and expected in lines[0], result.stderr
 
 
 def test_train_refuses_bad_input(tmp_path) -> None:

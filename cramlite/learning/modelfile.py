@@ -19,7 +19,7 @@ import numpy as np
 
 from cramlite.errors import UserInputError
 from cramlite.file_limits import check_size, checked_file
-from cramlite.learning.encoding import Vocabulary, nn_features
+from cramlite.learning.encoding import FIRST_ITEM, PER_ITEM, Vocabulary, nn_features
 from cramlite.learning.models import KINDS, CPTModel, NNModel, RNNModel
 from cramlite.safe_json import parse_json
 from cramlite.strategies.candidates import Candidate
@@ -133,13 +133,15 @@ def _load(path: str, mtime_ns: int, size: int) -> LearnedModel:
                            "split")
             if kind == "cpt":
                 sequences = parse_json(archive.read("sequences.json").decode("utf-8"))
+                _check_sequences(sequences, vocab, fail)
                 net: RNNModel | NNModel | CPTModel = CPTModel(sequences, vocab)
             else:
                 with np.load(io.BytesIO(archive.read("weights.npz")),
                              allow_pickle=False) as data:
                     weights = [data[f"arr_{i}"] for i in range(len(data.files))]
+                check = _check_rnn_weights if kind == "rnn" else _check_nn_weights
+                check(weights, len(vocab), fail)
                 net = RNNModel(weights) if kind == "rnn" else NNModel(weights)
-                _check_shapes(net, len(vocab), fail)
     except ModelFileError:
         raise
     except (zipfile.BadZipFile, KeyError, ValueError, OSError, EOFError) as exc:
@@ -148,8 +150,57 @@ def _load(path: str, mtime_ns: int, size: int) -> LearnedModel:
     return LearnedModel(meta, net, path)
 
 
-def _check_shapes(net: RNNModel | NNModel, vocab_size: int, fail) -> None:
-    out = net.out_bias if isinstance(net, RNNModel) else net.layers[-1][1]
-    if out.shape != (vocab_size,):
-        raise fail(f"the output layer has {out.shape} units for {vocab_size} items",
+def _check_sequences(sequences: Any, vocab: Sequence[str], fail) -> None:
+    """CPT's training sequences: a non-empty list of lists of vocabulary names."""
+    known = set(vocab)
+    if not isinstance(sequences, list) or not sequences or not all(
+            isinstance(seq, list) and all(isinstance(n, str) and n in known for n in seq)
+            for seq in sequences):
+        raise fail("expected a non-empty list of sequences, each a list of the vocabulary's "
+                   "item names", "sequences.json")
+
+
+def _shaped(weights: Sequence[np.ndarray], shapes: Sequence[tuple[int | None, ...]],
+            fail) -> None:
+    """Each array numeric, finite and of its shape (None: any length on that axis)."""
+    for i, (array, shape) in enumerate(zip(weights, shapes, strict=True)):
+        if array.dtype.kind not in "fiu" or array.ndim != len(shape) or any(
+                want is not None and got != want for got, want in zip(array.shape, shape,
+                                                                      strict=True)):
+            wanted = " x ".join("n" if n is None else str(n) for n in shape)
+            raise fail(f"array {i} is {array.dtype} of shape {array.shape}; expected numbers "
+                       f"of shape {wanted}", "weights.npz")
+        if not np.all(np.isfinite(array)):
+            raise fail(f"array {i} holds NaN or infinite numbers", "weights.npz")
+
+
+def _check_rnn_weights(weights: Sequence[np.ndarray], vocab_size: int, fail) -> None:
+    """The GRU's six arrays: embedding, kernel, recurrent kernel, biases, output layer."""
+    if len(weights) != 6:
+        raise fail(f"{len(weights)} arrays; expected the GRU's 6", "weights.npz")
+    if weights[2].ndim != 2:
+        raise fail("array 2 (the recurrent kernel) is not a matrix", "weights.npz")
+    units, embed = weights[2].shape[0], weights[0].shape[-1] if weights[0].ndim else 0
+    _shaped(weights, [(None, embed), (embed, 3 * units), (units, 3 * units), (2, 3 * units),
+                      (units, vocab_size), (vocab_size,)], fail)
+    if weights[0].shape[0] < vocab_size + FIRST_ITEM:
+        raise fail(f"the embedding has {weights[0].shape[0]} rows for {vocab_size} items",
                    "weights.npz")
+
+
+def _check_nn_weights(weights: Sequence[np.ndarray], vocab_size: int, fail) -> None:
+    """The feed-forward network: kernel and bias per layer, each layer fed by the one
+    before, the first by the context vector, the last giving a score per item."""
+    if not weights or len(weights) % 2:
+        raise fail(f"{len(weights)} arrays; expected a kernel and a bias per layer",
+                   "weights.npz")
+    inputs = vocab_size * len(PER_ITEM) + 3
+    shapes: list[tuple[int | None, ...]] = []
+    for i in range(0, len(weights), 2):
+        last = i == len(weights) - 2
+        width = vocab_size if last else (weights[i].shape[-1] if weights[i].ndim == 2 else -1)
+        shapes += [(inputs, width), (width,)]
+        inputs = width
+    _shaped(weights, shapes, fail)
+
+
