@@ -6,6 +6,17 @@ so the command line can print it as one line and exit with code 2.
 
 from __future__ import annotations
 
+#: The longest message kept in a results row or a task tree: an exception of a plugin can
+#: carry megabytes of text, and a CSV reader refuses a cell over 128 KiB.
+MESSAGE_LIMIT = 4000
+
+
+def bounded_text(text: str, limit: int = MESSAGE_LIMIT) -> str:
+    """`text`, cut to `limit` characters (saying how many were cut) if it is longer."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]} ... ({len(text) - limit} more characters)"
+
 
 class UserInputError(Exception):
     """Bad input from a user: a file, a field or a value that is not what was expected."""

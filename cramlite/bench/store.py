@@ -26,6 +26,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from cramlite.errors import UserInputError
 from cramlite.file_limits import checked_file
 from cramlite.safe_json import parse_json
 
@@ -70,12 +71,18 @@ class TrialStore:
         checked_file(self.path, "results")
         with self.path.open("rb") as handle:
             data = handle.read()
-        text = data[:complete_records_end(data)].decode("utf-8", errors="replace")
+        text = data[:self._records_end(data)].decode("utf-8", errors="replace")
         rows = []
-        for row in csv.DictReader(io.StringIO(text, newline="")):
-            if None in row or any(row.get(c) is None for c in COLUMNS):
-                continue  # (a record of other columns)
-            rows.append(row)
+        reader = csv.DictReader(io.StringIO(text, newline=""))
+        try:
+            for row in reader:
+                if None in row or any(row.get(c) is None for c in COLUMNS):
+                    continue  # (a record of other columns)
+                rows.append(row)
+        except csv.Error as exc:  # e.g. a cell over the csv module's 128 KiB
+            raise UserInputError(f"not a CSV record ({exc}); expected the rows `cramlite "
+                                 "bench` writes", source=str(self.path),
+                                 field=f"line {reader.line_num}") from None
         return rows
 
     def done_keys(self) -> set[tuple[str, ...]]:
@@ -108,6 +115,14 @@ class TrialStore:
                     f"(content hash {row['setup_hash']}, this one's is {expected}); expected "
                     "a new --out folder for a changed setup")
 
+    def _records_end(self, data: bytes) -> int:
+        try:
+            return complete_records_end(data)
+        except MalformedRecord as exc:
+            raise UserInputError(f"{exc}; expected the rows `cramlite bench` writes (fix or "
+                                 "remove that record)", source=str(self.path),
+                                 field=f"line {exc.line}") from None
+
     def repair(self) -> None:
         """Cut the file after its last complete record (after a kill or a full disk)."""
         if not self.path.exists():
@@ -115,7 +130,7 @@ class TrialStore:
         checked_file(self.path, "results")
         with self.path.open("rb") as handle:
             data = handle.read()
-        end = complete_records_end(data)
+        end = self._records_end(data)
         if end < len(data):
             with self.path.open("r+b") as handle:
                 handle.truncate(end)
@@ -219,6 +234,23 @@ def complete_records_end(data: bytes) -> int:
                     break  # the last record, cut just after a newline inside a cell
                 continue  # (a malformed record in the middle: kept, `rows` skips it)
             end = lines.position
-    except (csv.Error, StopIteration):  # (an open quote at the end: a cut cell)
+    except StopIteration:
         pass
+    except csv.Error as exc:
+        if "field limit" in str(exc) or lines.position < len(text):
+            # not a cut record (that one ends the file): a malformed one, with what follows
+            # it kept (cutting there would lose every complete row after it)
+            line = text.count("\n", 0, lines.position) + (not text[:lines.position]
+                                                          .endswith("\n"))
+            raise MalformedRecord(f"not a CSV record ({exc})", line) from None
+        # (an open quote at the end: a cut cell)
     return len(text[:end].encode("utf-8", errors="surrogateescape"))
+
+
+class MalformedRecord(ValueError):
+    """A record of a trials.csv that no crash can have written (it is not at the end, or
+    has a cell over the csv module's limit): the file is refused, never cut there."""
+
+    def __init__(self, message: str, line: int):
+        super().__init__(message)
+        self.line = line

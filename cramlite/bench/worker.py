@@ -22,6 +22,7 @@ from typing import Any
 
 from cramlite.bench.specs import FIXED_ORDER, TrialSpec
 from cramlite.designators.tasks import actions_only
+from cramlite.errors import bounded_text
 
 _RUNNERS: dict[tuple[str, str], Any] = {}  # (setup path, hash) -> TrialRunner, per process
 _TRIAL_LOCK = threading.Lock()  # one trial at a time in this process
@@ -106,7 +107,7 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
         if isinstance(exc, KeyboardInterrupt) and not _interrupts_are_code():
             raise  # (a real Ctrl-C to a process that takes it: stop)
         row.update(success=False, error_type=type(exc).__name__,
-                   error=f"{exc}".strip() or
+                   error=bounded_text(f"{exc}".strip()) or
                    (f"{type(exc).__name__} raised by the trial's code" if not isinstance(
                        exc, Exception) else traceback.format_exc(limit=1).strip()),
                    wall_s=time.perf_counter() - start)

@@ -8,6 +8,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from cramlite.errors import bounded_text
+
+#: The most entries of `tried` kept in a results row (each cut to 400 characters).
+TRIED_LIMIT = 50
+
 
 class PlanFailure(Exception):
     """A plan could not achieve something in the world (as opposed to a bug or bad input)."""
@@ -24,8 +29,11 @@ class PlanFailure(Exception):
         super().__init__(text)
 
     def as_dict(self) -> dict[str, object]:
-        return {"item": self.object, "type": type(self).__name__, "message": str(self),
-                "tried": self.tried}
+        tried = [bounded_text(str(t), 400) for t in self.tried[:TRIED_LIMIT]]
+        if len(self.tried) > TRIED_LIMIT:
+            tried.append(f"... and {len(self.tried) - TRIED_LIMIT} more")
+        return {"item": self.object, "type": type(self).__name__,
+                "message": bounded_text(str(self)), "tried": tried}
 
 
 class ObjectNotFound(PlanFailure):

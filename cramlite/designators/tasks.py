@@ -14,6 +14,8 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
+from cramlite.errors import bounded_text
+
 
 @dataclass
 class TaskNode:
@@ -54,7 +56,7 @@ class TaskTree:
             yield node
         except BaseException as exc:
             node.status = "failed"
-            node.failure = {"type": type(exc).__name__, "message": str(exc)}
+            node.failure = {"type": type(exc).__name__, "message": bounded_text(str(exc))}
             raise
         else:
             node.status = "succeeded"

@@ -12,6 +12,7 @@ import contextlib
 import csv
 import math
 import os
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -128,24 +129,42 @@ def _rows(path: Path) -> list[dict[str, Any]]:
         raise UserInputError(f"has no column {', '.join(missing)}; expected the columns "
                              "`cramlite bench` writes", source=src, field="line 1")
     rows = []
-    for number, row in enumerate(reader, start=2):
-        if None in row or any(row.get(c) is None for c in header):
-            continue  # a line cut short by a kill, or being written
-        for column, kind in JSON_COLUMNS.items():
-            cell = row.get(column) or ("[]" if kind is list else "{}")
-            try:
-                value = parse_json(cell)
-            except JSONInputError:
-                value = None
-            if not isinstance(value, kind):
-                raise UserInputError(f"{column}: expected a JSON {kind.__name__}, got "
-                                     f"{cell[:40]!r}", source=src, field=f"line {number}")
-            row[column] = value
-        if not row["trial"].isdigit():
-            raise UserInputError(f"trial: expected a whole number, got {row['trial']!r}",
-                                 source=src, field=f"line {number}")
-        rows.append(row)
+    try:
+        for number, row in enumerate(reader, start=2):
+            row = _checked_row(row, header, src, number)
+            if row is not None:
+                rows.append(row)
+    except csv.Error as exc:  # e.g. a cell over the csv module's 128 KiB
+        raise UserInputError(f"not a CSV record ({exc}); {NOT_A_BENCH}", source=src,
+                             field=f"line {reader.line_num + 1}") from None
     return rows
+
+
+def _checked_row(row: dict[str, Any], header: list[str], src: str, number: int,
+                 ) -> dict[str, Any] | None:
+    """A row with its JSON columns parsed and checked (None: a line cut short)."""
+    if None in row or any(row.get(c) is None for c in header):
+        return None  # a line cut short by a kill, or being written
+    for column, kind in JSON_COLUMNS.items():
+        cell = row.get(column) or ("[]" if kind is list else "{}")
+        try:
+            value = parse_json(cell)
+        except JSONInputError:
+            value = None
+        if not isinstance(value, kind):
+            raise UserInputError(f"{column}: expected a JSON {kind.__name__}, got "
+                                 f"{cell[:40]!r}", source=src, field=f"line {number}")
+        row[column] = value
+    if not all(isinstance(p, list) and len(p) >= 2 and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in p) for p in row["driven_path"]):
+        raise UserInputError("driven_path: expected a list of [x, y, ...] points (finite "
+                             f"numbers), got {row.get('driven_path')!r:.40}", source=src,
+                             field=f"line {number}")
+    if not re.fullmatch(r"[0-9]{1,9}", row["trial"]):
+        raise UserInputError(f"trial: expected a whole number, got {row['trial']!r}",
+                             source=src, field=f"line {number}")
+    return row
 
 
 def _names(text: Any) -> list[str]:
