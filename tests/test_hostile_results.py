@@ -60,9 +60,12 @@ def test_report_names_a_tampered_row(results, tmp_path, column, value, expected)
     _one_line(run_cli("report", str(out)), "trials.csv", "line 2", expected)
 
 
-def test_a_resumed_bench_names_an_unreadable_row(results, tmp_path) -> None:
-    out = _tampered(results, tmp_path, "error", "x" * 200_000)
-    _one_line(run_cli(*BENCH, "--out", str(out)), "trials.csv", "line 2", "field limit")
+@pytest.mark.parametrize("column, value, expected", [
+    ("error", "x" * 200_000, "field limit"), ("trial", "\u00b2", "trial: expected")])
+def test_a_resumed_bench_names_an_unreadable_row(results, tmp_path, column, value,
+                                                 expected) -> None:
+    out = _tampered(results, tmp_path, column, value)
+    _one_line(run_cli(*BENCH, "--out", str(out)), "trials.csv", "line 2", expected)
 
 
 def test_a_trials_huge_exception_text_is_bounded_and_the_folder_stays_readable(

@@ -20,6 +20,7 @@ import io
 import json
 import os
 import platform
+import re
 import sys
 import time
 from importlib import metadata
@@ -78,6 +79,10 @@ class TrialStore:
             for row in reader:
                 if None in row or any(row.get(c) is None for c in COLUMNS):
                     continue  # (a record of other columns)
+                if not re.fullmatch(r"[0-9]{1,9}", row["trial"]):
+                    raise UserInputError(f"trial: expected a whole number, got "
+                                         f"{row['trial'][:40]!r}", source=str(self.path),
+                                         field=f"line {reader.line_num}")
                 rows.append(row)
         except csv.Error as exc:  # e.g. a cell over the csv module's 128 KiB
             raise UserInputError(f"not a CSV record ({exc}); expected the rows `cramlite "
