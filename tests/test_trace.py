@@ -60,6 +60,14 @@ GOOD_STATE = {"t": 0.0, "base": [0, 0, 0], "q": [0.25, -1.7], "w": [], "held": {
      "objects: expected"),
     ([header(format=TRACE_FORMAT), {**GOOD_STATE, "base": [0, 0, float("nan")]}], 2,
      "base: expected"),
+    ([header(format=TRACE_FORMAT), {**GOOD_STATE, "held": {"cup": "middle"}}], 2,
+     "held: expected {object: arm} with arm left or right"),
+    ([header(format=TRACE_FORMAT), {**GOOD_STATE, "held": {"plate": "left"}}], 2,
+     "held: 'plate' is not one of the state's objects"),
+    ([header(format=TRACE_FORMAT), {**GOOD_STATE, "action": {"name": "X", "object": [1]}}],
+     2, "action: expected"),
+    ([header(format=TRACE_FORMAT), "{\"t\": " + "9" * 5000 + "}"], 2, "not usable JSON"),
+    ([header(format=TRACE_FORMAT), "[" * 50_000 + "]" * 50_000], 2, "nested too deeply"),
 ])
 def test_malformed_traces_name_the_line(tmp_path: Path, lines, line, expected) -> None:
     path = tmp_path / "bad.jsonl"

@@ -40,6 +40,8 @@ HEADER_KEYS = ("format", "setup", "plan", "strategy", "seed", "joints", "world_j
 #: What /2 adds to the header (optional on reading: /1 has none of them).
 HEADER_KEYS_2 = ("backend", "cramlite", "robot", "base_limits")
 STATE_KEYS = ("t", "base", "q", "w", "held", "objects", "action")
+#: The arms that can hold an object in a trace (the PR2's).
+HELD_BY = ("left", "right")
 DIGITS = 6
 
 
@@ -205,13 +207,18 @@ def _check_state(record: dict[str, Any], header: dict[str, Any], fail) -> None:
     if not _numbers(record["w"], len(header["world_joints"])):
         raise fail(f"w: expected {len(header['world_joints'])} numbers (the header's "
                    "world_joints)")
-    held = record["held"]
-    if not isinstance(held, dict) or not all(isinstance(v, str) for v in held.values()):
-        raise fail("held: expected {object: arm}")
     objects = record["objects"]
     if not isinstance(objects, dict) or not all(_numbers(v, 7) for v in objects.values()):
         raise fail("objects: expected {name: [x, y, z, qx, qy, qz, qw]}")
+    held = record["held"]
+    if not isinstance(held, dict) or not all(v in HELD_BY for v in held.values()):
+        raise fail(f"held: expected {{object: arm}} with arm {' or '.join(HELD_BY)}, got "
+                   f"{json.dumps(held)[:60]}")
+    unknown = [name for name in held if name not in objects]
+    if unknown:
+        raise fail(f"held: {unknown[0]!r} is not one of the state's objects")
     action = record["action"]
-    if action is not None and not (isinstance(action, dict) and isinstance(action.get("name"),
-                                                                          str)):
-        raise fail("action: expected null or {\"name\": ..., \"object\": ...}")
+    if action is not None and not (
+            isinstance(action, dict) and isinstance(action.get("name"), str)
+            and (action.get("object") is None or isinstance(action.get("object"), str))):
+        raise fail("action: expected null or {\"name\": text, \"object\": text or null}")
