@@ -124,6 +124,25 @@ NEGATIVE_BOX = (ROOT_ITEMS := Path(__file__).resolve().parents[1] / "worlds" / "
     and (ROOT_ITEMS / "milk.urdf").read_text().replace('size="0.075 0.075 0.2"',
                                                       'size="-0.075 0.075 0.2"')
 
+MILK = (ROOT_ITEMS / "milk.urdf").read_text()
+
+
+def _mesh(filename: str) -> str:
+    return (f"<robot name='x'><link name='a'><collision><geometry><mesh filename='{filename}'/>"
+            "</geometry></collision></link></robot>")
+
+
+def _links(n: int, origin: str = "", cycle: bool = False) -> str:
+    """A chain of n box links joined by fixed joints (the last joined back to the first
+    with `cycle`)."""
+    box = "<collision><geometry><box size='0.05 0.05 0.05'/></geometry></collision>"
+    links = "".join(f"<link name='l{i}'>{box}</link>" for i in range(n))
+    pairs = [(i - 1, i) for i in range(1, n)] + ([(n - 1, 0)] if cycle else [])
+    joints = "".join(f"<joint name='j{c}' type='fixed'><parent link='l{p}'/>"
+                     f"<child link='l{c}'/>{origin}</joint>" for p, c in pairs)
+    return f"<robot name='chain'>{links}{joints}</robot>"
+
+
 SPOON_POSE = "pose: [1.45, 0.35, 0.85, 0.0]"
 SPOON_TARGET = "target: [-0.85, 1.0, 0.86, 0.0]"
 CUP_TARGET = "target: [-1.0, 1.1, 0.86, 0.0]"
@@ -173,7 +192,7 @@ def test_impossible_setups_are_refused_at_load(tmp_path: Path, setup_text: str, 
     ("garbage, not XML", ("items[0].type", "not well-formed XML")),
     ("<robot name='x'/>", ("items[0].type", "at least one <link>")),
     ("<html><link/></html>", ("items[0].type", "expected a URDF")),
-    (NEGATIVE_BOX, ("items[0].type", "box size '-0.075 0.075 0.2'", "3 positive numbers")),
+    (NEGATIVE_BOX, ("items[0].type", "box size '-0.075 0.075 0.2'", "3 numbers > 0")),
     (NEGATIVE_BOX.replace('size="-0.075 0.075 0.2"', 'size="0.075 nan 0.2"'),
      ("items[0].type", "box size")),
     (NEGATIVE_BOX.replace('size="-0.075 0.075 0.2"', 'size="0.075 0.075 0.2"').replace(
@@ -182,6 +201,24 @@ def test_impossible_setups_are_refused_at_load(tmp_path: Path, setup_text: str, 
      "</geometry></visual></link></robot>", ("items[0].type", "mesh file 'nowhere.obj'")),
     ("<robot name='x'><link name='a'><collision><geometry><cylinder radius='0' length='1'/>"
      "</geometry></collision></link></robot>", ("items[0].type", "cylinder radius '0'")),
+    # what the C++ parsers print, crash on or accept (#29 findings 6-7)
+    (MILK.replace('size="0.075 0.075 0.2"', 'size="1e300 0.075 0.2"'),
+     ("items[0].type", "box size '1e300 0.075 0.2'", "<= 100")),
+    (MILK.replace('value="1.05"', 'value="1e308"'), ("items[0].type", "mass '1e308'")),
+    (_mesh("package://pr2_description/meshes/x.stl"), ("no package://",)),
+    (_mesh("/etc/passwd"), ("mesh '/etc/passwd'", "no absolute path")),
+    (_mesh("../../x.stl"), ("no ..",)),
+    (_mesh("odd.urdf"), ("expected a .stl, .obj, .dae, .ply file",)),
+    (_mesh("odd.stl' scale='-1 nan 0"), ("mesh scale '-1 nan 0'",)),
+    (_links(3, "<origin xyz='0 nan 0'/>"), ("joint 'j1': origin xyz '0 nan 0'",)),
+    (_links(3, cycle=True), ("joint cycle",)),
+    (_links(1001), ("1001 links; at most 1000",)),
+    (_links(3).replace("<joint name='j2'", "<joint name='j1'"), ("two joints named 'j1'",)),
+    (_links(3).replace("<parent link='l1'/>", "<parent link='nope'/>"), ("no link 'nope'",)),
+    (_links(3).replace("<joint name='j2' type='fixed'>", "<joint name='j2' type='hinge'>"),
+     ("type 'hinge'",)),
+    ("<!DOCTYPE r [<!ENTITY a 'aaaa'>]><robot name='x'><link name='&a;'/></robot>",
+     ("DOCTYPE",)),
 ])
 def test_item_urdfs_that_cannot_be_loaded_are_refused(tmp_path: Path, setup_text: str,
                                                       urdf: str,
@@ -189,6 +226,28 @@ def test_item_urdfs_that_cannot_be_loaded_are_refused(tmp_path: Path, setup_text
     (tmp_path / "odd.urdf").write_text(urdf)
     path = _write(tmp_path, setup_text.replace("type: spoon ", "type: odd.urdf ", 1))
     _assert_user_error(run_cli("show", str(path)), str(path), *fragments)
+
+
+def test_a_utf16_urdf_and_a_mesh_outside_the_folder_are_refused(tmp_path: Path,
+                                                                 setup_text: str) -> None:
+    (tmp_path / "odd.urdf").write_bytes(MILK.encode("utf-16"))
+    path = _write(tmp_path, setup_text.replace("type: spoon ", "type: odd.urdf ", 1))
+    _assert_user_error(run_cli("show", str(path)), str(path), "items[0].type", "not UTF-8")
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "link.stl").symlink_to("/etc/passwd")
+    (tmp_path / "odd.urdf").write_text(_mesh("sub/link.stl"))
+    _assert_user_error(run_cli("show", str(path)), str(path), "leads outside the URDF's folder")
+    (tmp_path / "garbage.obj").write_text("not a mesh\n")  # (coal's loader: 5 lines)
+    (tmp_path / "odd.urdf").write_text(_mesh("garbage.obj"))
+    _assert_user_error(run_cli("show", str(path)), str(path), "garbage.obj", "Hint")
+    assert "assimp.cpp" not in run_cli("show", str(path)).stderr
+
+
+def test_a_chain_of_1000_links_loads(tmp_path: Path, setup_text: str) -> None:
+    from cramlite.world.urdf_check import urdf_problem
+
+    (tmp_path / "chain.urdf").write_text(_links(1000))
+    assert urdf_problem(tmp_path / "chain.urdf") is None
 
 
 def test_other_unreadable_setup_files(tmp_path: Path) -> None:

@@ -99,13 +99,27 @@ class Belief:
     held: dict[str, Held] = field(default_factory=dict)
 
 
+def loader_message(exc: BaseException) -> str:
+    """A C++ loader's exception (coal's and Pinocchio's say where in their source they
+    were raised, over several lines) as one line: what went wrong."""
+    text = str(exc)
+    if "message:" in text:
+        text = text.split("message:", 1)[1]
+    return "; ".join(line.strip() for line in text.splitlines() if line.strip()) or \
+        type(exc).__name__
+
+
 class PlanningScene:
     """The robot (PR2), a world URDF with its containers, and a setup's items."""
 
     def __init__(self, setup: Setup):
         self.setup = setup
         self.robot = pr2_model()
-        self.kitchen = kitchen_model(setup.world_urdf)
+        try:
+            self.kitchen = kitchen_model(setup.world_urdf)
+        except (ValueError, RuntimeError) as exc:
+            raise SetupError(f"{setup.world_urdf}: {loader_message(exc)}",
+                             source=str(setup.source), field="world") from None
         self.containers: dict[str, Container] = load_containers(setup.world_urdf)
         self._check_containers()
         self.items: dict[str, SceneItem] = {}
@@ -113,7 +127,7 @@ class PlanningScene:
             try:
                 model = item_model(spec.urdf, spec.type)
             except (ValueError, RuntimeError) as exc:
-                raise SetupError(f"{spec.urdf}: {exc}", source=str(setup.source),
+                raise SetupError(f"{spec.urdf}: {loader_message(exc)}", source=str(setup.source),
                                  field=f"items[{i}].type") from None
             self.items[spec.name] = SceneItem(spec.name, spec.type, model)
         start = setup.robot_start

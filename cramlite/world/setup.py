@@ -14,7 +14,6 @@ from __future__ import annotations
 import hashlib
 import math
 import re
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -25,6 +24,7 @@ from cramlite.errors import SetupError
 from cramlite.resources import worlds_dir
 from cramlite.world.item_types import item_type_file
 from cramlite.world.strict_yaml import ALIASES_REFUSED, load_strict
+from cramlite.world.urdf_check import urdf_problem
 
 #: Relational-dependency categories of the OPM (SPEC section 1); "none" means k = 1.
 CATEGORIES = ("strong", "mid", "food", "none")
@@ -39,7 +39,6 @@ NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]{0,63}")
 NAME_RULE = ("1-64 letters, digits, '_', '.', '+' or '-', starting with a letter or digit "
              "(names become file names)")
 MAX_SETUP_BYTES = 1024 * 1024
-MAX_URDF_BYTES = 4 * 1024 * 1024
 MAX_ITEMS = 100
 #: Poses are metres in a room-sized world, yaw in radians.
 MAX_ABS_POSITION_M = 1000.0
@@ -320,70 +319,6 @@ def _numbers(value: Any, n: int, fld: str, shape: str, fail) -> tuple[float, ...
                                       f"got {shown}")
         out.append(float(v))
     return tuple(out)
-
-
-def _positive_numbers(text: str | None, n: int) -> bool:
-    try:
-        values = [float(v) for v in (text or "").split()]
-    except ValueError:
-        return False
-    return len(values) == n and all(math.isfinite(v) and v > 0 for v in values)
-
-
-def _finite_numbers(text: str | None, n: int) -> bool:
-    try:
-        values = [float(v) for v in (text or "").split()]
-    except ValueError:
-        return False
-    return len(values) == n and all(math.isfinite(v) for v in values)
-
-
-def urdf_problem(path: Path) -> str | None:
-    """Why a URDF file could not be loaded as an item or world, else None: not a
-    well-formed <robot> with links, or a geometry with a size that is not positive, an
-    origin that is not finite, a negative mass, a missing mesh file. (PyBullet loads a
-    box of negative size without complaint and then misbehaves.)"""
-    try:
-        if path.stat().st_size > MAX_URDF_BYTES:
-            return f"larger than {MAX_URDF_BYTES} bytes"
-        root = ET.parse(path).getroot()
-    except ET.ParseError as exc:
-        return f"not well-formed XML ({exc}); expected a URDF"
-    except OSError as exc:
-        return f"cannot read it ({exc.strerror or type(exc).__name__})"
-    if root.tag != "robot" or root.find("link") is None:
-        return "expected a URDF: a <robot> element with at least one <link>"
-    for link in root.iter("link"):
-        label = f"link {link.get('name')!r}"
-        for geometry in link.iter("geometry"):
-            for shape in geometry:
-                if shape.tag == "box" and not _positive_numbers(shape.get("size"), 3):
-                    return f"{label}: box size {shape.get('size')!r}; expected 3 positive numbers"
-                if shape.tag == "cylinder" and not (
-                        _positive_numbers(shape.get("radius"), 1)
-                        and _positive_numbers(shape.get("length"), 1)):
-                    return (f"{label}: cylinder radius {shape.get('radius')!r} length "
-                            f"{shape.get('length')!r}; expected positive numbers")
-                if shape.tag == "sphere" and not _positive_numbers(shape.get("radius"), 1):
-                    return (f"{label}: sphere radius {shape.get('radius')!r}; expected a "
-                            "positive number")
-                if shape.tag == "mesh":
-                    filename = shape.get("filename") or ""
-                    if not filename.startswith("package://") and not (
-                            (path.parent / filename).is_file()):
-                        return f"{label}: mesh file {filename!r} not found"
-        for origin in link.iter("origin"):
-            for attr in ("xyz", "rpy"):
-                if origin.get(attr) is not None and not _finite_numbers(origin.get(attr), 3):
-                    return f"{label}: origin {attr} {origin.get(attr)!r}; expected 3 numbers"
-        for mass in link.iter("mass"):
-            try:
-                value = float(mass.get("value", ""))
-            except ValueError:
-                value = math.nan
-            if not (math.isfinite(value) and value >= 0):
-                return f"{label}: mass {mass.get('value')!r}; expected a number >= 0"
-    return None
 
 
 def _resolve_urdf(name: str, setup_path: Path, folder: Path) -> Path | None:
