@@ -178,6 +178,10 @@ START = "start: [-0.5, -1.8, 1.5708]"
     ("name: v1", "name: 'a\\\\b'", ("name", "file names")),
     ("name: v1", "name: ''", ("name", "file names")),
     ("  - name: spoon", "  - name: soup spoon", ("items[0].name", "'soup spoon'")),
+    # YAML 1.1: `yes:` is a boolean key, `true` equals 1
+    ("name: v1", "name: v1\nyes: 1", ("line", "the key 'yes' is read as bool True")),
+    ("name: v1", "name: v1\n2: 1", ("line", "the key '2' is read as int 2")),
+    ("format: 1", "format: true", ("format", "expected 1, got True")),
 ])
 def test_impossible_setups_are_refused_at_load(tmp_path: Path, setup_text: str, old: str,
                                                new: str, fragments: tuple[str, ...]) -> None:

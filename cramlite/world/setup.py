@@ -181,7 +181,7 @@ def parse_setup(data: Any, path: Path) -> Setup:
     if unknown:
         raise fail(sorted(unknown)[0], f"unknown key; expected one of {sorted(TOP_KEYS)}")
     fmt = data.get("format", SETUP_FORMAT)
-    if fmt != SETUP_FORMAT:
+    if type(fmt) is not type(SETUP_FORMAT) or fmt != SETUP_FORMAT:  # (true == 1)
         raise fail("format", f"expected {SETUP_FORMAT}, got {fmt!r}")
     name = data.get("name", path.stem)
     if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name):

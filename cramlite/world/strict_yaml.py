@@ -1,5 +1,6 @@
 """YAML as cramlite reads its own files (setups, item types): the safe loader, a key given
-twice in one mapping refused (the last would silently win), and anchors and aliases
+twice in one mapping refused (the last would silently win), keys that are not text
+refused (`yes:` is a boolean key in YAML 1.1), and anchors and aliases
 refused (`&a`, `*a`, and so `<<:` merge keys): a 3 KB file of nested aliases expands to
 gigabytes when printed or walked, and no setup needs them."""
 
@@ -28,11 +29,15 @@ def _mapping_without_duplicates(loader: StrictLoader, node: yaml.MappingNode,
     seen = set()
     for key_node, _ in node.value:
         key = loader.construct_object(key_node, deep=True)
-        if isinstance(key, (str, int, float, bool)) or key is None:
-            if key in seen:
-                raise yaml.constructor.ConstructorError(
-                    None, None, f"the key {key!r} appears twice", key_node.start_mark)
-            seen.add(key)
+        if not isinstance(key, str):  # (YAML 1.1 reads `yes:`, `on:` and `1:` as others)
+            raise yaml.constructor.ConstructorError(
+                None, None, f"the key {key_node.value!r} is read as {type(key).__name__} "
+                f"{key!r}; expected a text key (quote it: \"{key_node.value}\":)",
+                key_node.start_mark)
+        if key in seen:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"the key {key!r} appears twice", key_node.start_mark)
+        seen.add(key)
     return loader.construct_mapping(node, deep=deep)
 
 
