@@ -63,7 +63,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return func(args)
     except UserInputError as exc:
         command = getattr(locals().get("args"), "command", None)
-        print(f"cramlite {command}: error: {exc}" if command else f"cramlite: error: {exc}",
+        text = one_line(str(exc))
+        print(f"cramlite {command}: error: {text}" if command else f"cramlite: error: {text}",
               file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
@@ -72,6 +73,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # e.g. `cramlite order ... | head -c 10`: end quietly
         _silence_stdout()
         return EXIT_BROKEN_PIPE
+
+
+def one_line(text: str) -> str:
+    """A message as one line (a plugin's exception text may hold several): its lines
+    joined by " / ", and cut to 2000 characters."""
+    from cramlite.errors import bounded_text
+
+    return bounded_text(" / ".join(p.strip() for p in text.splitlines() if p.strip()), 2000)
 
 
 def _silence_stdout() -> None:

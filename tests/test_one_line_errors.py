@@ -1,0 +1,37 @@
+"""A mistake in a user's own code reaches the command line as one line (#29 finding 7):
+a strategy whose exception text has several lines, a module that raises on import."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import run_cli
+
+RAISES_IN_CHOOSE = '''
+from cramlite import Strategy
+
+
+class Cls(Strategy):
+    name = "raiser"
+    uses_params = False
+
+    def choose(self, remaining, agent):
+        raise RuntimeError("first line\\nsecond line\\n  third line")
+'''
+RAISES_ON_IMPORT = 'raise ValueError("boom\\nline two")\n'
+
+
+@pytest.mark.parametrize("source, expected", [
+    (RAISES_IN_CHOOSE, "raised RuntimeError: first line / second line / third line"),
+    (RAISES_ON_IMPORT, "ValueError: boom / line two"),
+])
+def test_a_multi_line_exception_of_a_plugin_is_one_line(tmp_path: Path, source: str,
+                                                        expected: str) -> None:
+    (tmp_path / "s.py").write_text(source)
+    for command in (["run", "v1", "--backend", "kinematic"], ["evaluate", "table-setting"]):
+        result = run_cli(*command, "--strategy", "./s.py:Cls", cwd=tmp_path)
+        lines = result.stderr.strip().splitlines()
+        assert result.returncode == 2 and len(lines) == 1, result.stderr
+        assert expected in lines[0] and "--strategy" in lines[0]
