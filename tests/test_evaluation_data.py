@@ -113,3 +113,13 @@ def test_duplicate_episode_ids_are_refused_or_skipped(tmp_path: Path) -> None:
     assert [e.id for e in episodes] == ["k01", "s13-d21"] and bad[0].field == "ID"
     result = run_cli("compare", str(path), "--strategies", "opm,nearest", "--repeats", "1")
     assert result.returncode == 2 and "row k01: ID: duplicate" in result.stderr
+
+
+def test_a_row_without_an_id_is_refused_or_skipped_by_its_row_number(tmp_path: Path) -> None:
+    path = write_csv(tmp_path, COOKING, ["", *COOKING[1:]])
+    with pytest.raises(DataError, match="data row 2: ID: expected the episode's ID"):
+        load_episodes(path)
+    episodes, bad = load_episodes(path, on_bad_row="skip")
+    assert [e.id for e in episodes] == ["s13-d21"] and bad[0].id == "? (data row 2)"
+    result = run_cli("evaluate", str(path))
+    assert result.returncode == 2 and "data row 2: ID" in result.stderr

@@ -117,6 +117,8 @@ def parse_row(row: dict[str, str]) -> Episode:
     def fail(column: str, message: str) -> DataError:
         return DataError(message, source=f"row {row_id}", field=column)
 
+    if row_id == "?":
+        raise fail("ID", "expected the episode's ID, got nothing")
     sequence = tuple(n.strip() for n in (row.get("sequence") or "").split(",") if n.strip())
     if not sequence:
         raise fail("sequence", "expected comma-separated item names, got nothing")
@@ -216,7 +218,7 @@ def load_episodes(path: str | Path, on_bad_row: str = "fail",
         raise ValueError("on_bad_row must be 'fail' or 'skip'")
     episodes, bad = [], []
     seen: set[str] = set()
-    for row in iter_rows(path):
+    for number, row in enumerate(iter_rows(path), start=1):
         try:
             episode = parse_row(row)
             if episode.id in seen:  # (results are keyed and paired by ID)
@@ -225,10 +227,13 @@ def load_episodes(path: str | Path, on_bad_row: str = "fail",
             seen.add(episode.id)
             episodes.append(episode)
         except DataError as exc:
+            if exc.source == "row ?":  # (no ID to name it by)
+                exc.source = f"data row {number}"
             if on_bad_row == "fail":
                 raise DataError(exc.detail, source=f"{path}: {exc.source}",
                                 field=exc.field) from None
-            bad.append(BadRow((row.get("ID") or "?").strip(), exc.field or "", exc.detail))
+            bad.append(BadRow((row.get("ID") or "").strip() or f"? (data row {number})",
+                              exc.field or "", exc.detail))
     if not episodes and not bad:
         raise DataError("no rows", source=str(path))
     return episodes, bad
