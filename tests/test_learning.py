@@ -167,14 +167,16 @@ def test_bad_model_files_exit_2(tmp_path, name, content, expected) -> None:
     assert str(path) in result.stderr and expected in result.stderr
 
 
-def test_model_of_another_format_version_is_refused(models, tmp_path) -> None:
+@pytest.mark.parametrize("version", [99, True, 1.0])
+def test_model_of_another_format_version_is_refused(models, tmp_path, version) -> None:
     path = tmp_path / "future.model"
     with zipfile.ZipFile(models["cpt"]) as old, zipfile.ZipFile(path, "w") as new:
         meta = json.loads(old.read("model.json"))
-        meta["format_version"] = 99
+        meta["format_version"] = version
         new.writestr("model.json", json.dumps(meta))
         new.writestr("sequences.json", old.read("sequences.json"))
-    with pytest.raises(ModelFileError, match="format_version: expected version 1, got 99"):
+    with pytest.raises(ModelFileError, match=f"format_version: expected version 1, got "
+                                             f"{version!r}"):
         load_model(path)
     result = run_cli("compare", "table-setting", "--strategies", f"opm,learned:{path}")
     assert result.returncode == 2 and "format_version" in result.stderr

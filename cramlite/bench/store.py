@@ -168,7 +168,7 @@ class TrialStore:
             value = parse_json(meta.read_text(encoding="utf-8")).get("results_format", 1)
         except (OSError, ValueError, AttributeError):
             return 1
-        return value if isinstance(value, int) else 1
+        return value if type(value) is int else 1  # (not true, which == 1)
 
     def write_metadata(self, args: dict[str, Any], executor: str) -> None:
         versions = {}

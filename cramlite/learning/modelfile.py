@@ -110,7 +110,8 @@ def _load(path: str, mtime_ns: int, size: int) -> LearnedModel:
             meta = parse_json(archive.read("model.json").decode("utf-8"))
             if not isinstance(meta, dict) or meta.get("format") != FORMAT:
                 raise fail(f"expected {FORMAT!r}", "format")
-            if meta.get("format_version") != FORMAT_VERSION:
+            if type(meta.get("format_version")) is not int or \
+                    meta.get("format_version") != FORMAT_VERSION:  # (true == 1)
                 raise fail(f"expected version {FORMAT_VERSION}, got "
                            f"{meta.get('format_version')!r}: retrain with this cramlite",
                            "format_version")
