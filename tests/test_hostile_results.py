@@ -54,6 +54,11 @@ def _one_line(result, *expected: str) -> None:
     ("driven_path", "[[1]]", "driven_path: expected a list of [x, y, ...] points"),
     ("driven_path", "[[1, NaN]]", "driven_path: expected"),
     ("driven_path", "[\"a\"]", "driven_path: expected"),
+    ("success", "maybe", "success: expected True or False, got 'maybe'"),
+    ("seed", "nan", "seed: expected a whole number"),
+    ("robot_time_s", "inf", "robot_time_s: expected a number >= 0"),
+    ("wall_s", "-1", "wall_s: expected a number >= 0"),
+    ("backend", "kine\x00matic", "backend: holds a control character"),
 ])
 def test_report_names_a_tampered_row(results, tmp_path, column, value, expected) -> None:
     out = _tampered(results, tmp_path, column, value)
@@ -61,7 +66,8 @@ def test_report_names_a_tampered_row(results, tmp_path, column, value, expected)
 
 
 @pytest.mark.parametrize("column, value, expected", [
-    ("error", "x" * 200_000, "field limit"), ("trial", "\u00b2", "trial: expected")])
+    ("error", "x" * 200_000, "field limit"), ("trial", "\u00b2", "trial: expected"),
+    ("success", "maybe", "success: expected"), ("backend", "kine\x00matic", "NUL")])
 def test_a_resumed_bench_names_an_unreadable_row(results, tmp_path, column, value,
                                                  expected) -> None:
     out = _tampered(results, tmp_path, column, value)

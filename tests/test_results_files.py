@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from cramlite.bench.row_check import MEASURE_COLUMNS
 from cramlite.bench.specs import BatchPlan, SetupEntry, trace_file
 from cramlite.bench.store import COLUMNS, TrialStore
 from cramlite.errors import UserInputError
@@ -21,7 +22,8 @@ from tests.conftest import ROOT
 
 def row(trial: int, error: str = "") -> dict[str, str]:
     out = dict.fromkeys(COLUMNS, "x")
-    out.update(trial=str(trial), error=error, setup="v1", strategy="boom")
+    out.update(trial=str(trial), error=error, setup="v1", strategy="boom", seed="7",
+               batch_seed="0", success="False", **dict.fromkeys(MEASURE_COLUMNS, ""))
     return out
 
 

@@ -20,13 +20,13 @@ import io
 import json
 import os
 import platform
-import re
 import sys
 import time
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from cramlite.bench.row_check import row_problem
 from cramlite.errors import UserInputError
 from cramlite.file_limits import checked_file
 from cramlite.safe_json import parse_json
@@ -79,9 +79,9 @@ class TrialStore:
             for row in reader:
                 if None in row or any(row.get(c) is None for c in COLUMNS):
                     continue  # (a record of other columns)
-                if not re.fullmatch(r"[0-9]{1,9}", row["trial"]):
-                    raise UserInputError(f"trial: expected a whole number, got "
-                                         f"{row['trial'][:40]!r}", source=str(self.path),
+                problem = row_problem(row)
+                if problem:
+                    raise UserInputError(f"{problem[0]}: {problem[1]}", source=str(self.path),
                                          field=f"line {reader.line_num}")
                 rows.append(row)
         except csv.Error as exc:  # e.g. a cell over the csv module's 128 KiB

@@ -12,12 +12,12 @@ import contextlib
 import csv
 import math
 import os
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from cramlite.bench.labels import by_backend, several_backends
+from cramlite.bench.row_check import row_problem
 from cramlite.bench.specs import FIXED_ORDER, trace_file
 from cramlite.errors import UserInputError
 from cramlite.file_limits import checked_file
@@ -161,9 +161,9 @@ def _checked_row(row: dict[str, Any], header: list[str], src: str, number: int,
         raise UserInputError("driven_path: expected a list of [x, y, ...] points (finite "
                              f"numbers), got {row.get('driven_path')!r:.40}", source=src,
                              field=f"line {number}")
-    if not re.fullmatch(r"[0-9]{1,9}", row["trial"]):
-        raise UserInputError(f"trial: expected a whole number, got {row['trial']!r}",
-                             source=src, field=f"line {number}")
+    problem = row_problem(row)
+    if problem:
+        raise UserInputError(f"{problem[0]}: {problem[1]}", source=src, field=f"line {number}")
     return row
 
 
