@@ -194,3 +194,21 @@ def test_a_trace_that_cannot_be_written_is_one_line_naming_it() -> None:
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in done.stderr
     assert "/dev/full" in lines[0] and "cannot write the trace" in lines[0]
+
+
+def test_an_object_the_setup_lacks_is_malformed_and_a_zero_quaternion_a_finding(
+        tmp_path: Path) -> None:
+    ghost = write(tmp_path / "ghost.jsonl", [(0.0, [-0.5, -1.8, math.pi / 2]),
+                                             (1.0, [-0.5, -1.8, math.pi / 2])])
+    lines = ghost.read_text().splitlines()
+    state = json.loads(lines[2])
+    state["objects"]["ghost"] = [0.0, -2.5, 0.5, 0.0, 0.0, 0.0, 1.0]
+    ghost.write_text("\n".join([*lines[:2], json.dumps(state)]) + "\n")
+    result = run_cli("replay", str(ghost), "--check")
+    assert result.returncode == 2 and len(result.stderr.strip().splitlines()) == 1
+    assert f"{ghost}: line 3: objects: 'ghost' is not an item of the setup" in result.stderr
+    state["objects"] = {"cup": [1.45, 0.85, 0.85, 0.0, 0.0, 0.0, 0.0]}
+    ghost.write_text("\n".join([*lines[:2], json.dumps(state)]) + "\n")
+    result = run_cli("replay", str(ghost), "--check")
+    assert result.returncode == 1 and "quaternion has norm 0" in result.stdout
+    assert "Warning" not in result.stderr, result.stderr

@@ -43,8 +43,18 @@ def image_side(text: str) -> int:
 
 def cmd_replay(args: argparse.Namespace) -> int:
     from cramlite.trace import read_trace
+    from cramlite.trace.format import TraceError
 
     trace = read_trace(args.trace)
+    try:
+        return _replay(args, trace)
+    except TraceError as exc:  # (found while checking: the file is named here)
+        if exc.source:
+            raise
+        raise TraceError(exc.detail, source=args.trace, field=exc.field) from None
+
+
+def _replay(args: argparse.Namespace, trace) -> int:
     if not (args.out or args.gui or args.check):
         raise UserInputError("say what to do: --out FILE.gif, --gui or --check", field="--out")
     if args.out and not args.out.lower().endswith(".gif"):

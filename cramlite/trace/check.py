@@ -405,6 +405,12 @@ def checker_for(trace: Trace) -> TraceChecker:
     if missing:
         raise TraceError(f"header fields joints/world_joints: no joint {missing[0]!r} in the "
                          "robot or the world", field="line 1")
+    items = {spec.name for spec in setup.items}
+    for line, state in enumerate(trace.states, start=2):
+        unknown = [name for name in state["objects"] if name not in items]
+        if unknown:
+            raise TraceError(f"objects: {unknown[0]!r} is not an item of the setup "
+                             f"{setup.name!r}", field=f"line {line}")
     return TraceChecker(setup, list(trace.header["joints"]), list(trace.header["world_joints"]))
 
 
@@ -436,7 +442,8 @@ def _interpolate(a: dict[str, Any], b: dict[str, Any], s: float) -> dict[str, An
         if qa @ qb < 0:
             qb = -qb
         quat = qa + s * (qb - qa)
-        objects[name] = [*position, *(quat / np.linalg.norm(quat))]
+        norm = float(np.linalg.norm(quat))  # (zero for a zero quaternion: a finding)
+        objects[name] = [*position, *(quat / norm if norm > 1e-9 else quat)]
     return {**a, "t": a["t"] + s * (b["t"] - a["t"]), "base": base, "q": q, "w": w,
             "objects": objects}
 
