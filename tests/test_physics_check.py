@@ -140,3 +140,22 @@ def test_impossible_states_are_findings(trace, change: str, kind: str) -> None:
         state["base"][0] = 1e300
     found = [f for f in physics_findings(bad) if f.kind == kind]
     assert found and found[0].line == i + 2, physics_findings(bad)
+
+
+def test_a_header_cannot_widen_the_robots_limits(trace) -> None:
+    """(The red-team raised base_limits to 1e308 to hide a jump, and a header's joint
+    limits could hide a torso at 5 m: the PR2's own limits hold, the claim is a finding.)"""
+    bad = copy.deepcopy(trace)
+    bad.header["base_limits"] = dict.fromkeys(bad.header["base_limits"], 1e308)
+    moving = [i for i in range(1, len(bad.states) - 1)
+              if bad.states[i]["base"] != bad.states[i - 1]["base"]]
+    bad.states[moving[len(moving) // 2]]["base"][0] += 0.05
+    torso = bad.header["joints"].index("torso_lift_joint")
+    bad.header["robot"]["joint_limits"]["torso_lift_joint"] = [0.0, 10.0, 0.013]
+    bad.states[len(bad.states) // 3]["q"][torso] = 5.0
+    kinds = {f.kind for f in physics_findings(bad)}
+    assert {"base acceleration", "joint limit", "header"} <= kinds
+    claims = [f.what for f in physics_findings(bad) if f.kind == "header"]
+    assert any("accel_m_s2 1e+308 beyond the PR2's 1" in c for c in claims)
+    assert any("torso_lift_joint [0, 10] wider than the URDF's" in c for c in claims)
+    assert not [f for f in physics_findings(trace) if f.kind == "header"]

@@ -120,7 +120,7 @@ def test_replay_check_finds_the_robot_inside_the_island(tmp_path: Path) -> None:
 @pytest.mark.parametrize("args, expected", [
     (["--out", "x.png"], "ending in .gif"),
     ([], "say what to do"),
-    (["--out", "x.gif", "--fps", "0"], "positive number"),
+    (["--out", "x.gif", "--fps", "0"], "frames per second > 0"),
     (["--out", "x.gif", "--width", "100000"], "pixels"),
 ])
 def test_replay_bad_options_exit_2(tmp_path: Path, args, expected) -> None:

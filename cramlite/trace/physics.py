@@ -47,7 +47,8 @@ OPEN_FINGER_RAD = 0.54
 class Finding:
     """One thing the robot could not have done so."""
 
-    kind: str  #: grip | tilt | base acceleration | yaw | joint limit | orientation | base
+    #: grip | tilt | base acceleration | yaw | joint limit | orientation | base | header
+    kind: str
     what: str
     value: float
     limit: float
@@ -94,15 +95,30 @@ def _impossible(trace: Trace):
     orientations that are not rotations, a base far outside any kitchen."""
     from cramlite.scene.models import pr2_model
 
-    limits = (trace.header.get("robot") or {}).get("joint_limits") or {}
+    claimed = (trace.header.get("robot") or {}).get("joint_limits") or {}
     joints = trace.header["joints"]
     # (a mimic joint follows its leader, as the URDF's mimic tag says; its own limits are
     # not the motion's: the PR2's right finger roots turn opposite to their limits' sign)
     model = pr2_model()
     followers = {m.joint for m in model.mimics}
-    bounds = [(i, name, limits[name][0], limits[name][1]) for i, name in enumerate(joints)
-              if name in limits and name not in followers
-              and isinstance(limits[name], list) and len(limits[name]) >= 2]
+    bounds = []
+    for i, name in enumerate(joints):
+        joint = model.joints.get(name)
+        if joint is None or name in followers or joint.kind == "continuous":
+            continue
+        # the URDF's limits, or the header's where they are tighter: a header cannot make
+        # a joint reach further than the robot's own URDF lets it
+        lower, upper = joint.lower, joint.upper
+        given = claimed.get(name)
+        if isinstance(given, list) and len(given) >= 2 and all(
+                isinstance(v, int | float) and math.isfinite(v) for v in given[:2]):
+            if given[0] < lower - 1e-6 or given[1] > upper + 1e-6:
+                yield Finding("header", f"joint_limits of {name} [{given[0]:g}, "
+                              f"{given[1]:g}] wider than the URDF's [{lower:g}, {upper:g}]",
+                              round(max(lower - given[0], given[1] - upper), 4), 0.0, "",
+                              0.0, 1)
+            lower, upper = max(lower, given[0]), min(upper, given[1])
+        bounds.append((i, name, lower, upper))
     for k, state in enumerate(trace.states):
         line = k + 2
         for i, name, lower, upper in bounds:
@@ -199,8 +215,17 @@ def _tilts(trace: Trace, checker: TraceChecker):
 
 def _base_accelerations(trace: Trace):
     header = trace.header.get("base_limits") or {}
-    limits = BaseLimits(**{k: float(v) for k, v in header.items()
-                           if k in BaseLimits.__dataclass_fields__})
+    pr2 = BaseLimits()
+    values = {}
+    for key in BaseLimits.__dataclass_fields__:  # (the PR2's, or the header's if tighter)
+        own, given = getattr(pr2, key), header.get(key)
+        value = float(given) if isinstance(given, int | float) and math.isfinite(given) \
+            and given > 0 else own
+        if value > own + 1e-9:
+            yield Finding("header", f"base_limits {key} {value:g} beyond the PR2's {own:g}",
+                          value, own, "", 0.0, 1)
+        values[key] = min(value, own)
+    limits = BaseLimits(**values)
     states = trace.states
     if len(states) < 2:
         return
