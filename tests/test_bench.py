@@ -154,9 +154,10 @@ def test_failing_and_crashing_trials_are_recorded_and_the_batch_goes_on(tmp_path
     (["--setups", ""], "--setups: expected at least one setup"),
     (["--trials", "0"], "[1, 1000000]"),
     (["--trials", "1000000001"], "[1, 1000000]"),
-    (["--workers", "-2"], "positive"),
-    (["--workers", "100000"], "--workers: 100000 local workers"),
-    (["--random-setups", "0"], "positive"),
+    (["--workers", "-2"], "[1, 1024]"),
+    (["--workers", "1000"], "--workers: 1000 local workers"),
+    (["--workers", "100000"], "[1, 1024]"),
+    (["--random-setups", "0"], "[1, 100000]"),
     (["--trial-timeout", "0"], "seconds > 0"),
     (["--trial-timeout", "nan"], "seconds > 0"),
     (["--scheduler", "tcp://127.0.0.1:1"], "--executor dask"),
@@ -169,6 +170,7 @@ def test_failing_and_crashing_trials_are_recorded_and_the_batch_goes_on(tmp_path
     (["--executor", "dask", "--scheduler", "127.0.0.1:port"], "malformed"),
     (["--executor", "dask", "--scheduler", "foo://bar:1"], "malformed"),
     (["--executor", "dask", "--scheduler", "tcp://127.0.0.1:70000"], "malformed"),
+    (["--executor", "dask", "--scheduler", "ucx://127.0.0.1:1"], "ucx:// protocol needs UCX"),
 ])
 def test_bad_arguments_exit_2_and_list_the_choices(tmp_path: Path, args, expected) -> None:
     start = time.perf_counter()

@@ -23,6 +23,7 @@ Faults:
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import multiprocessing
 import os
 import queue
@@ -211,6 +212,10 @@ def open_pool(kind: str, workers: int, scheduler: str | None = None,
 SCHEDULER_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")
 
 
+#: The modules that give Dask its ucx:// protocol.
+UCX_MODULES = ("ucp", "distributed_ucxx")
+
+
 def check_scheduler(address: str) -> None:
     """Fail fast on a malformed or unreachable scheduler address (SchedulerUnreachable):
     the scheme must be one Dask knows, and a host:port must accept a connection."""
@@ -226,8 +231,10 @@ def check_scheduler(address: str) -> None:
         protocol, location = parse_address(address, strict=False)
         if protocol not in SCHEDULER_SCHEMES:
             raise ValueError(f"scheme {protocol!r} is not one of {', '.join(SCHEDULER_SCHEMES)}")
-        if protocol == "ucx":
-            return
+        if protocol == "ucx" and not any(importlib.util.find_spec(m) for m in UCX_MODULES):
+            raise SchedulerUnreachable(f"{address}: the ucx:// protocol needs UCX for Dask "
+                                       "(ucx-py or distributed-ucxx), which is not installed; "
+                                       f"{expected}")
         host, port = parse_host_port(location)
     except (ValueError, TypeError) as exc:
         raise SchedulerUnreachable(f"malformed Dask scheduler address {address!r} ({exc}); "
