@@ -68,6 +68,17 @@ GOOD_STATE = {"t": 0.0, "base": [0, 0, 0], "q": [0.25, -1.7], "w": [], "held": {
      2, "action: expected"),
     ([header(format=TRACE_FORMAT), "{\"t\": " + "9" * 5000 + "}"], 2, "not usable JSON"),
     ([header(format=TRACE_FORMAT), "[" * 50_000 + "]" * 50_000], 2, "nested too deeply"),
+    ([header(format=TRACE_FORMAT, robot="pr2")], 1, "header field robot: expected"),
+    ([header(format=TRACE_FORMAT, robot={"joint_limits": [1]})], 1, "header field robot"),
+    ([header(format=TRACE_FORMAT, robot={"joint_limits": {"a": ["a", "b", "c"]}})], 1,
+     "header field robot"),
+    ([header(format=TRACE_FORMAT, base_limits=[1, 2])], 1, "header field base_limits"),
+    ([header(format=TRACE_FORMAT, base_limits={"accel_m_s2": "abc"})], 1,
+     "header field base_limits"),
+    ([header(format=TRACE_FORMAT, base_limits={"speed_m_s": -1})], 1,
+     "header field base_limits"),
+    ([header(format=TRACE_FORMAT, joints=[JOINTS[0], JOINTS[0]])], 1,
+     "header field joints: 'torso_lift_joint' is listed twice"),
 ])
 def test_malformed_traces_name_the_line(tmp_path: Path, lines, line, expected) -> None:
     path = tmp_path / "bad.jsonl"

@@ -189,7 +189,37 @@ def _check_header(record: dict[str, Any], fail) -> dict[str, Any]:
         value = record[key]
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
             raise fail(f"header field {key}: expected a list of joint names")
+        if len(set(value)) != len(value):
+            twice = next(v for v in value if value.count(v) > 1)
+            raise fail(f"header field {key}: {twice!r} is listed twice")
+    _check_header_2(record, fail)
     return record
+
+
+def _limit(value: Any) -> bool:
+    """A joint limit entry's number: finite, or null (none: a continuous joint)."""
+    return value is None or (isinstance(value, int | float) and not isinstance(value, bool)
+                             and math.isfinite(value))
+
+
+def _check_header_2(record: dict[str, Any], fail) -> None:
+    """What /2 adds, where given: the robot's joint limits and the base's limits."""
+    robot = record.get("robot")
+    if robot is not None:
+        limits = robot.get("joint_limits", {}) if isinstance(robot, dict) else None
+        if not isinstance(limits, dict) or not all(
+                isinstance(v, list) and 2 <= len(v) <= 3 and all(_limit(x) for x in v)
+                for v in limits.values()):
+            raise fail("header field robot: expected {\"urdf\": ..., \"joint_limits\": "
+                       "{name: [lower, upper, velocity]}} (numbers, or null for none)")
+    base = record.get("base_limits")
+    if base is not None:
+        keys = ("speed_m_s", "turn_rad_s", "accel_m_s2", "turn_accel_rad_s2")
+        if not isinstance(base, dict) or not all(
+                k in keys and isinstance(v, int | float) and not isinstance(v, bool)
+                and math.isfinite(v) and v > 0 for k, v in base.items()):
+            raise fail(f"header field base_limits: expected {{name: number > 0}} with names "
+                       f"among {', '.join(keys)}")
 
 
 def _check_state(record: dict[str, Any], header: dict[str, Any], fail) -> None:
