@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from cramlite.report.trials import Bar, bars, ok
+from cramlite.world.map_labels import badge_candidates, movable, settle_labels
 from cramlite.world.topdown import Layout, draw_layout
 
 #: Colours of the actions on timelines (others: ACTION_OTHER).
@@ -29,6 +30,10 @@ def _pyplot():
     return plt
 
 
+#: The resolution maps are saved at (labels are placed for it).
+MAP_DPI = 125
+
+
 def _save(fig: Any, path: Path, dpi: int = DPI) -> Path:
     plt = _pyplot()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -43,6 +48,14 @@ def setup_map(layout: Layout, rows: Sequence[dict[str, Any]], strategies: Sequen
     """One panel per strategy: the kitchen, every trial's driven path faint, the
     highlighted trial's bold with its fetch order numbered at the items, and a red cross
     where a failed trial stopped."""
+    return _save(setup_map_figure(layout, rows, strategies, colours, highlighted), path,
+                 dpi=MAP_DPI)
+
+
+def setup_map_figure(layout: Layout, rows: Sequence[dict[str, Any]],
+                     strategies: Sequence[str], colours: dict[str, str],
+                     highlighted: dict[str, dict[str, Any]]) -> Any:
+    """The figure `setup_map` saves (its text placed for the dpi it is saved at)."""
     from matplotlib.lines import Line2D
 
     plt = _pyplot()
@@ -93,7 +106,9 @@ def setup_map(layout: Layout, rows: Sequence[dict[str, Any]], strategies: Sequen
 
     fig.legend(handles=handles + legend_handles(), loc="outside lower center",
                ncol=3, fontsize=8, frameon=False)
-    return _save(fig, path, dpi=125)
+    fig.set_dpi(MAP_DPI)
+    settle_labels(fig)
+    return fig
 
 
 def _highlight(ax: Any, layout: Layout, row: dict[str, Any], colour: str) -> None:
@@ -119,10 +134,12 @@ def _highlight(ax: Any, layout: Layout, row: dict[str, Any], colour: str) -> Non
         if name not in spots:
             continue
         x, y = spots[name]
-        ax.annotate(str(k), (x, y), xytext=(-10, 8), textcoords="offset points", fontsize=8,
-                    fontweight="bold", color="white", ha="center", va="center", zorder=12,
-                    bbox={"boxstyle": "circle,pad=0.25", "facecolor": colour,
-                          "edgecolor": "white", "linewidth": 0.6})
+        badge = ax.annotate(str(k), (x, y), xytext=(-10, 8), textcoords="offset points",
+                            fontsize=8, fontweight="bold", color="white", ha="center",
+                            va="center", zorder=12,
+                            bbox={"boxstyle": "circle,pad=0.25", "facecolor": colour,
+                                  "edgecolor": "white", "linewidth": 0.6})
+        movable(badge, badge_candidates())
     for x, y in failed_spots(layout, row):
         ax.plot(x, y, marker="x", color=FAILED, markersize=11, markeredgewidth=2.5, zorder=11)
 

@@ -23,7 +23,7 @@ WALL_PREFIX = "wall"
 FLOOR = "floor"
 #: Width (m) of the label columns left and right of the kitchen, and the label spacing.
 LABEL_COLUMN_M = 1.6
-LABEL_GAP_M = 0.2
+LABEL_GAP_M = 0.25
 ITEM_COLOUR = "#222222"
 TARGET_COLOUR = "#555555"
 
@@ -139,19 +139,16 @@ def draw_layout(ax: Any, layout: Layout, legend: bool = True, font_size: float =
         ax.add_patch(Rectangle((box.x0, box.y0), box.x1 - box.x0, box.y1 - box.y0,
                                facecolor=shade, edgecolor="#8a8a8a" if not wall else "none",
                                linewidth=0.5, zorder=1))
+    _metre_grid(ax, f, font_size)
     for box in layout.boxes:
         if _labelled(box.name, names) and (box.x1 - box.x0) * (box.y1 - box.y0) > 0.05:
-            long_side_y = (box.y1 - box.y0) > 1.5 * (box.x1 - box.x0)
-            ax.text((box.x0 + box.x1) / 2, (box.y0 + box.y1) / 2, box.name,
-                    ha="center", va="center", fontsize=font_size, color="#3a3a3a",
-                    rotation=90 if long_side_y else 0, zorder=2, alpha=0.8)
+            _box_name(ax, box, font_size, "#3a3a3a")
     for box in layout.containers:
         ax.add_patch(Rectangle((box.x0, box.y0), box.x1 - box.x0, box.y1 - box.y0,
                                facecolor="none", edgecolor="#7a4e9c", linestyle="--",
                                linewidth=0.9, zorder=2))
         if box.name not in names:
-            ax.text(box.x0 + 0.03, (box.y0 + box.y1) / 2, box.name, ha="left", va="center",
-                    fontsize=font_size - 1.5, color="#7a4e9c", zorder=2, rotation=90)
+            _box_name(ax, box, font_size - 1.0, "#7a4e9c")
     x, y, yaw = layout.start
     ax.add_patch(FancyArrow(x, y, 0.35 * math.cos(yaw), 0.35 * math.sin(yaw), width=0.05,
                             head_width=0.2, head_length=0.15, color="black", zorder=6))
@@ -165,13 +162,41 @@ def draw_layout(ax: Any, layout: Layout, legend: bool = True, font_size: float =
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal")
-    ax.set_xticks([])
-    ax.set_yticks([])
     for spine in ax.spines.values():
         spine.set_visible(False)
     if legend:
         ax.legend(handles=legend_handles(), loc="lower left", fontsize=font_size - 0.5,
                   framealpha=0.9)
+
+
+def _box_name(ax: Any, box: Box, font_size: float, colour: str) -> None:
+    """A box's name, placed later (`map_labels.settle_labels`) where no marker, text or
+    leader line is: inside along its long side, or else beside it."""
+    from cramlite.world.map_labels import furniture_candidates, movable
+
+    candidates = furniture_candidates(box.x0, box.y0, box.x1, box.y1)
+    first = candidates[0]
+    text = ax.text(*first["xy"], box.name, ha=first["ha"], va=first["va"],
+                   rotation=first["rotation"], fontsize=font_size, color=colour, zorder=8,
+                   bbox={"boxstyle": "square,pad=0.1", "facecolor": "white", "alpha": 0.55,
+                         "edgecolor": "none"})
+    movable(text, candidates)
+
+
+def _metre_grid(ax: Any, floor: Box, font_size: float) -> None:
+    """Faint lines every metre over the floor, with metre ticks on the axes: a user
+    writing a setup reads coordinates off the map."""
+    xs = [float(v) for v in range(math.ceil(floor.x0), math.floor(floor.x1) + 1)]
+    ys = [float(v) for v in range(math.ceil(floor.y0), math.floor(floor.y1) + 1)]
+    for x in xs:
+        ax.plot([x, x], [floor.y0, floor.y1], color="#d8d4cc", linewidth=0.4, zorder=0.5)
+    for y in ys:
+        ax.plot([floor.x0, floor.x1], [y, y], color="#d8d4cc", linewidth=0.4, zorder=0.5)
+    ax.set_xticks(xs, [f"{v:g}" for v in xs], fontsize=font_size - 1)
+    ax.set_yticks(ys, [f"{v:g}" for v in ys], fontsize=font_size - 1)
+    ax.tick_params(length=2, pad=1, colors="#666666")
+    ax.set_xlabel("x (m)", fontsize=font_size - 0.5, color="#666666", labelpad=1)
+    ax.set_ylabel("y (m)", fontsize=font_size - 0.5, color="#666666", labelpad=1)
 
 
 def _inside_walls(layout: Layout) -> Box:
@@ -208,17 +233,20 @@ def _spots_with_labels(ax: Any, layout: Layout, font_size: float) -> None:
         if not group:
             continue
         ys = spread([s.y for s, _ in group], LABEL_GAP_M, y0 + 0.1, y1 - 0.1)
-        column = x0 + 0.08 if side == "left" else x1 - 0.08
         edge = min(b.x0 for b in layout.boxes) if side == "left" else \
             max(b.x1 for b in layout.boxes)
+        # labels end toward the kitchen, where their leader line starts (a line drawn
+        # from the column's outer side ran under the labels' text)
+        column = edge - 0.12 if side == "left" else edge + 0.12
         for (spot, kind), label_y in zip(group, ys, strict=True):
             item = kind == "item"
             text = spot.name if item else f"target: {spot.name}"
             if item and spot.container:
                 text += f" (in {spot.container})"
-            ax.plot([spot.x, edge, column + (0.05 if side == "left" else -0.05)],
-                    [spot.y, label_y, label_y], color="#b0b0b0", linewidth=0.5, zorder=3)
-            ax.text(column, label_y, text, ha="left" if side == "left" else "right",
+            ax.plot([spot.x, edge, column + (0.04 if side == "left" else -0.04)],
+                    [spot.y, label_y, label_y], color="#b0b0b0", linewidth=0.5, zorder=3,
+                    gid="leader")
+            ax.text(column, label_y, text, ha="right" if side == "left" else "left",
                     va="center", fontsize=font_size, zorder=8,
                     color=ITEM_COLOUR if item else TARGET_COLOUR,
                     fontweight="bold" if item else "normal",
@@ -244,6 +272,20 @@ def save_top_view(setup: Setup, path: str | Path, width_px: int = 1024,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    fig = top_view_figure(setup, width_px, height_px)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=fig.dpi)
+    plt.close(fig)
+    return path
+
+
+def top_view_figure(setup: Setup, width_px: int = 1024, height_px: int = 768) -> Any:
+    """The figure `save_top_view` saves."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     layout = load_layout(setup)
     dpi = 100
     fig, ax = plt.subplots(figsize=(width_px / dpi, height_px / dpi), dpi=dpi)
@@ -251,8 +293,7 @@ def save_top_view(setup: Setup, path: str | Path, width_px: int = 1024,
     ax.set_title(f"{setup.name}: {setup.description}" if setup.description else setup.name,
                  fontsize=9)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    return path
+    from cramlite.world.map_labels import settle_labels
+
+    settle_labels(fig)
+    return fig
