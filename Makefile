@@ -25,8 +25,9 @@ $(STAMP): pyproject.toml | $(BIN)/python
 
 # Exit code 1 of a bench means some trials failed: those are results (the report shows
 # them), so `make run` goes on and its last line is the path of results/report.html.
+# --traces: the report shows replays of the first trial of each setup and strategy.
 run: $(RUN_STAMP)
-	$(BIN)/cramlite bench --out results || [ $$? -eq 1 ]
+	$(BIN)/cramlite bench --traces --out results || [ $$? -eq 1 ]
 
 test: $(STAMP)
 	$(BIN)/ruff check .

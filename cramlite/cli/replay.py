@@ -16,6 +16,7 @@ from cramlite.cli.common import (
     writable_file,
 )
 from cramlite.errors import UserInputError
+from cramlite.render.camera_modes import CAMERA_MODES
 
 MAX_SIDE_PX = 4096
 
@@ -93,7 +94,7 @@ def _replay(args: argparse.Namespace, trace) -> int:
         with tqdm(total=total, desc="frames", disable=not sys.stderr.isatty(),
                   leave=False) as bar:
             frames = render_gif(trace, args.out, args.fps, args.speed, args.width, args.height,
-                                progress=bar.update, backend=backend)
+                                progress=bar.update, backend=backend, camera=args.camera)
         print(f"wrote {args.out}: {frames} frames, {trace.duration_s:.1f} s of robot time at "
               f"{args.fps:g} fps, speed x{args.speed:g} (drawn as the {backend} backend "
               "draws)")
@@ -128,6 +129,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     replay.add_argument("--width", type=image_side, default=480, help="GIF width (default 480)")
     replay.add_argument("--height", type=image_side, default=360,
                         help="GIF height (default 360)")
+    replay.add_argument("--camera", default="fixed", choices=CAMERA_MODES,
+                        help="fixed: the kitchen from above its south end (default); top: "
+                             "straight down on the whole kitchen; follow: behind and above "
+                             "the robot, looking where it works")
     replay.add_argument("--gui", action="store_true",
                         help="play it in the PyBullet window (needs a display)")
     replay.add_argument("--check", action="store_true",

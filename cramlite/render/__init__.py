@@ -108,7 +108,7 @@ class TraceFrames:
             from cramlite.backends.pybullet.replay import apply_state, render_frame
 
             apply_state(self._world, header["joints"], state, header["world_joints"])
-            return render_frame(self._world, width, height)
+            return render_frame(self._world, width, height, view)
         if self._mujoco is not None:
             from cramlite.backends.mujoco.render import Renderer
             from cramlite.backends.mujoco.replay import apply_state as mujoco_apply

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cramlite.render.camera_modes import CAMERA_MODES
+
 FIELD_OF_VIEW_DEG = 50.0
 NEAR_M, FAR_M = 0.05, 30.0
 
@@ -84,6 +86,30 @@ SHOW_CAMERA = {"target": (0.3, 0.2, 0.5), "distance": 5.6, "yaw_deg": 135.0,
                "pitch_deg": -48.0}
 REPLAY_CAMERA = {"target": (0.15, 0.15, 0.3), "distance": 5.6, "yaw_deg": -20.0,
                  "pitch_deg": -52.0}
+
+
+#: How a replay's camera moves: `fixed` (REPLAY_CAMERA), `top` (straight down on the
+#: whole kitchen) or `follow` (behind and above the robot, looking where it faces: into
+#: the drawer it opens, onto the spot it places on).
+TOP_CAMERA = {"target": (0.15, 0.15, 0.0), "distance": 8.6, "yaw_deg": 0.0,
+              "pitch_deg": -89.0}
+FOLLOW_DISTANCE_M, FOLLOW_PITCH_DEG, FOLLOW_HEIGHT_M = 2.6, -42.0, 0.75
+
+
+def replay_view(mode: str, base: Sequence[float]) -> dict:
+    """The camera of a replay frame whose robot base is at `base` (x, y, yaw)."""
+    if mode == "fixed":
+        return dict(REPLAY_CAMERA)
+    if mode == "top":
+        return dict(TOP_CAMERA)
+    if mode == "follow":
+        x, y, yaw = (float(v) for v in base[:3])
+        ahead = 0.6  # (look a little in front of the robot: where its hands work)
+        return {"target": (x + ahead * math.cos(yaw), y + ahead * math.sin(yaw),
+                           FOLLOW_HEIGHT_M),
+                "distance": FOLLOW_DISTANCE_M, "yaw_deg": math.degrees(yaw) - 90.0,
+                "pitch_deg": FOLLOW_PITCH_DEG}
+    raise ValueError(f"camera {mode!r}: expected one of {', '.join(CAMERA_MODES)}")
 
 
 def as_tuple(values: Sequence[float]) -> tuple[float, ...]:

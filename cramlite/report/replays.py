@@ -8,10 +8,12 @@ from pathlib import Path
 
 from cramlite.errors import UserInputError
 
-#: Small and quick: a replay of a 90 s trial is ~55 frames, ~300 KB, ~3 s to draw.
+#: Quick to draw: a replay of a 90 s trial is ~55 frames, ~3-5 s to draw; large enough to
+#: see the items, the camera following the robot (into the drawer it opens).
 FPS = 5.0
-WIDTH, HEIGHT = 400, 300
+WIDTH, HEIGHT = 560, 420
 DEFAULT_SPEED = 8.0
+CAMERA = "follow"
 
 
 def replay_name(trial: str, speed: float) -> str:
@@ -29,7 +31,7 @@ def ensure_replay(trace: Path, out: Path, speed: float = DEFAULT_SPEED) -> str:
     partial = out.with_name(out.stem + ".part.gif")
     try:
         render_gif(read_trace(trace), partial, fps=FPS, speed=speed, width=WIDTH,
-                   height=HEIGHT)
+                   height=HEIGHT, camera=CAMERA)
     except UserInputError as exc:
         partial.unlink(missing_ok=True)
         return f"replay not drawn: {exc}"

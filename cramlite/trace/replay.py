@@ -34,13 +34,38 @@ def states_at_frames(trace: Trace, fps: float, speed: float) -> Iterator[dict[st
         yield trace.states[max(0, bisect.bisect_right(times, t + 1e-9) - 1)]
 
 
+#: What the robot is doing, by action, in the captions (the object follows the verb).
+DOING = {"NavigateAction": "driving", "PickUpAction": "picking up", "PlaceAction":
+         "putting down", "OpenAction": "opening", "CloseAction": "closing",
+         "ParkArmsAction": "parking the arms", "MoveTorsoAction": "moving the torso",
+         "LookAtAction": "looking at", "DetectAction": "looking for", "SetGripperAction":
+         "moving a gripper", "TransportAction": "fetching", "PickAndPlaceAction":
+         "moving"}
+
+
+def doing(state: dict[str, Any]) -> str:
+    """The caption's words for a state: what the robot does and what it carries, e.g.
+    "carrying bowl (right hand): parking the arms", "opening drawer_1"."""
+    action = state.get("action") or {}
+    name = action.get("name") or ""
+    obj = action.get("object") or ""
+    held = state.get("held") or {}
+    verb = DOING.get(name, name.removesuffix("Action").lower())
+    if obj and obj in held and name not in ("PickUpAction", "PlaceAction"):
+        obj = ""  # (it is the one carried: said below)
+    words = f"{verb} {obj}".strip()
+    if held:
+        carried = ", ".join(f"{item} ({arm} hand)" for item, arm in sorted(held.items()))
+        return f"carrying {carried}: {words}" if words else f"carrying {carried}"
+    return words
+
+
 def caption(image, t: float, state: dict[str, Any]) -> None:
-    """Robot time and the action in progress, top left (every frame differs, so a GIF
+    """Robot time and what the robot does, top left (every frame differs, so a GIF
     writer cannot merge frames)."""
     from PIL import ImageDraw
 
-    action = state.get("action") or {}
-    text = f"t = {t:6.2f} s  {action.get('name', '')} {action.get('object') or ''}".rstrip()
+    text = f"t = {t:6.2f} s  {doing(state)}".rstrip()
     draw = ImageDraw.Draw(image)
     box = draw.textbbox((6, 4), text)
     draw.rectangle((box[0] - 3, box[1] - 2, box[2] + 3, box[3] + 2), fill=(255, 255, 255))
@@ -50,13 +75,17 @@ def caption(image, t: float, state: dict[str, Any]) -> None:
 def render_gif(trace: Trace, out: str | Path, fps: float = 10.0, speed: float = 1.0,
                width: int = 480, height: int = 360,
                progress: Callable[[int], None] | None = None,
-               backend: str | None = None) -> int:
+               backend: str | None = None, camera: str = "fixed") -> int:
     """Render the trace as an animated GIF (drawn as `backend` draws: default the
-    default backend); returns the number of frames."""
+    default backend; `camera`: fixed, top or follow, see `replay_view`); returns the
+    number of frames."""
     from PIL import Image
 
     from cramlite.backends import default_backend
     from cramlite.render import TraceFrames
+    from cramlite.render.camera import replay_view
+
+    replay_view(camera, (0.0, 0.0, 0.0))  # (an unknown mode fails before any drawing)
 
     if not trace.states:
         raise TraceError("the trace has no states to replay", field="line 2")
@@ -68,7 +97,8 @@ def render_gif(trace: Trace, out: str | Path, fps: float = 10.0, speed: float = 
     frames = []
     with TraceFrames(trace, backend or default_backend()) as drawer:
         for k, state in enumerate(states_at_frames(trace, fps, speed)):
-            image = Image.fromarray(drawer.image(state, width, height))
+            image = Image.fromarray(drawer.image(state, width, height,
+                                                 replay_view(camera, state["base"])))
             caption(image, k * speed / fps, state)
             frames.append(image.quantize(colors=128, method=Image.Quantize.MEDIANCUT))
             if progress:
@@ -87,5 +117,5 @@ def replay_gui(trace: Trace, speed: float = 1.0) -> None:
     play(trace, speed)
 
 
-__all__ = ["MAX_FRAMES", "Penetration", "caption", "frame_count", "penetrations",
-           "render_gif", "replay_gui", "states_at_frames"]
+__all__ = ["DOING", "MAX_FRAMES", "Penetration", "caption", "doing", "frame_count",
+           "penetrations", "render_gif", "replay_gui", "states_at_frames"]

@@ -49,11 +49,13 @@ def apply_state(world: World, joints: Sequence[str], state: dict[str, Any],
             world.objects[name].set_pose(tuple(pose[:3]), tuple(pose[3:]))
 
 
-def render_frame(world: World, width: int, height: int) -> np.ndarray:
+def render_frame(world: World, width: int, height: int, view: dict | None = None,
+                 ) -> np.ndarray:
     from cramlite.backends.pybullet.render import render
 
-    return render(world, width, height, target=CAMERA["target"], distance=CAMERA["distance"],
-                  yaw_deg=CAMERA["yaw_deg"], pitch_deg=CAMERA["pitch_deg"], shadow=False)
+    view = {**CAMERA, **(view or {})}
+    return render(world, width, height, target=view["target"], distance=view["distance"],
+                  yaw_deg=view["yaw_deg"], pitch_deg=view["pitch_deg"], shadow=False)
 
 
 def replay_gui(trace: Trace, speed: float = 1.0) -> None:
