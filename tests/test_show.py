@@ -64,3 +64,21 @@ def test_image_bounds_and_unwritable_places(tmp_path: Path) -> None:
     onto_folder = run_cli("show", "v1", "--out", str(folder))
     assert onto_folder.returncode == 2 and "cannot write the image" in onto_folder.stderr
     assert "Traceback" not in under_file.stderr + onto_folder.stderr
+
+
+def test_show_warns_of_an_item_out_of_reach_naming_it_and_how_far(tmp_path) -> None:
+    """(#27: an item at x = 1.82 passed `show` and failed at run time with "1080 base
+    poses ... inside fixed geometry".)"""
+    from tests.conftest import ROOT
+
+    text = (ROOT / "worlds" / "setups" / "v1.yaml").read_text()
+    far = tmp_path / "far.yaml"
+    far.write_text(text.replace("pose: [1.45, 0.35, 0.85, 0.0]", "pose: [1.82, 0.35, 0.85, 0.0]"))
+    result = run_cli("show", str(far), "--out", str(tmp_path / "far.png"))
+    assert result.returncode == 0, result.stderr  # (valid: a run fails there, as a result)
+    assert "items[0].pose: item 'spoon' at (1.82, 0.35) is out of the robot's reach: the " \
+           "nearest floor the base can stand on is 0.95 m from it" in result.stderr
+    assert "0.21 m nearer the open floor" in result.stderr
+    unreachable = run_cli("show", "unreachable", "--out", str(tmp_path / "u.png"))
+    assert "item 'milk'" in unreachable.stderr and "out of the robot's reach" in unreachable.stderr
+    assert "warning" not in run_cli("show", "c3", "--out", str(tmp_path / "c3.png")).stderr

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from cramlite.cli.common import (
     BACKEND_HELP,
@@ -40,11 +41,14 @@ def _save_image(image, path: str, option: str) -> str:
 
 def cmd_show(args: argparse.Namespace) -> int:
     from cramlite.scene.scene import PlanningScene
-    from cramlite.scene.validate import check_setup
+    from cramlite.scene.validate import check_setup, reach_problems
     from cramlite.world import load_setup
 
     setup = load_setup(args.setup)
-    check_setup(PlanningScene(setup))
+    scene = PlanningScene(setup)
+    check_setup(scene)
+    for problem in reach_problems(scene):  # (a run will fail there; the setup is valid)
+        print(f"cramlite show: warning: {setup.source}: {problem}", file=sys.stderr)
     if args.top:
         return _show_top(setup, args)
     from cramlite.render import draw_setup
