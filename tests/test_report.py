@@ -262,6 +262,10 @@ def test_the_rerun_command_of_a_setup_file_runs_as_printed(tmp_path) -> None:
     import os
 
     assert f"workers</th><td>{os.cpu_count()}<" in text
+    params = text.split("Parameters (last bench command)")[1].split("</table>")[0]
+    assert "None" not in params and "backends_list" not in params
+    assert "scheduler</th><td>(not given: the default)<" in params
+    assert "backends</th><td>kinematic<" in params
     (command,) = set(re.findall(r"Rerun it alone: <code>(.*?)</code>", text))
     words = shlex.split(command)
     assert words[:3] == ["cramlite", "run", str(setup)]  # its path, not its name (my6)

@@ -179,11 +179,24 @@ def _status(data: PageData) -> str:
     return f'<p class="status complete">Complete: {e(counts)}.</p>'
 
 
+#: Arguments a bench records that are its own bookkeeping, not options a user gave.
+INTERNAL_ARGUMENTS = ("command", "backends_list", "inject_text")
+
+
+def _argument(value: object) -> str:
+    """An option's value as a user would write it (None: not given, so the default)."""
+    if value is None:
+        return "(not given: the default)"
+    if isinstance(value, list | tuple):
+        return ",".join(str(v) for v in value)
+    return str(value)
+
+
 def _run(folder: BenchFolder) -> str:
     meta = folder.metadata
     arguments = meta.get("arguments") if isinstance(meta.get("arguments"), dict) else {}
-    params = "".join(f"<tr><th>{e(k)}</th><td>{e(v)}</td></tr>"
-                     for k, v in arguments.items() if k != "command")
+    params = "".join(f"<tr><th>{e(k)}</th><td>{e(_argument(v))}</td></tr>"
+                     for k, v in arguments.items() if k not in INTERNAL_ARGUMENTS)
     versions = meta.get("versions") if isinstance(meta.get("versions"), dict) else {}
     libs = "".join(f"<tr><th>{e(k)}</th><td>{e(v)}</td></tr>" for k, v in versions.items())
     runs = meta.get("runs") if isinstance(meta.get("runs"), list) else []
