@@ -129,3 +129,30 @@ def test_the_report_map_has_no_overlapping_text(name: str) -> None:
         assert _markers_on_names(fig, layout) == []
     finally:
         plt.close(fig)
+
+
+def test_a_timeline_with_a_parallel_step_has_no_overlapping_text() -> None:
+    """(The torso rising while the base drives drew 'MoveTorso' under 'Transport
+    breakfast-cereal' in the report's first timeline.)"""
+    import matplotlib.pyplot as plt
+
+    from cramlite.report.figures import timeline_figure
+
+    def node(name, start, end, obj=None, children=()):
+        return {"name": name, "object": obj, "start_s": start, "end_s": end,
+                "status": "succeeded", "children": list(children), "failure": None}
+
+    actions = [node("ParkArmsAction", 0.0, 2.0),
+               node("MoveTorsoAction", 2.0, 21.0),
+               node("TransportAction", 2.1, 28.0, "breakfast-cereal",
+                    [node("NavigateAction", 2.1, 21.5), node("PickUpAction", 21.5, 25.0,
+                                                             "breakfast-cereal")]),
+               node("TransportAction", 28.0, 40.0, "cup")]
+    fig = timeline_figure({"setup": "v1", "strategy": "baseline", "trial": "0",
+                           "success": "True", "actions": actions})
+    try:
+        assert _overlaps(fig) == []
+        labels = [t.get_text() for t in fig.axes[0].texts]
+        assert "Transport breakfast-cereal" in labels
+    finally:
+        plt.close(fig)

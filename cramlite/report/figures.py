@@ -173,6 +173,18 @@ def _arrows(ax: Any, xy: Sequence[Sequence[float]], colour: str) -> None:
         travelled += length
 
 
+def _runs_alongside(bar: Any, items: Sequence[Any]) -> bool:
+    """Does a longer bar of the same depth overlap this one in time (a parallel step)?"""
+    span = bar.end - bar.start
+    for other in items:
+        if other is bar or other.depth != bar.depth:
+            continue
+        overlap = min(bar.end, other.end) - max(bar.start, other.start)
+        if overlap > 1e-6 and (other.end - other.start, other.start) > (span, bar.start):
+            return True
+    return False
+
+
 def _wrap(text: str, width: int) -> str:
     words, lines, line = text.split(" "), [], ""
     for word in words:
@@ -186,7 +198,13 @@ def _wrap(text: str, width: int) -> str:
 
 def timeline(row: dict[str, Any], path: Path) -> Path:
     """The trial's task tree as bars over robot time, one lane per depth; failed actions
-    outlined red, instant failed attempts as red crosses (with their count)."""
+    outlined red, instant failed attempts as red crosses (with their count); a step run
+    at the same time as a longer one (in parallel) as a strip along the lane's top."""
+    return _save(timeline_figure(row), path)
+
+
+def timeline_figure(row: dict[str, Any]) -> Any:
+    """The figure `timeline` saves."""
     from matplotlib.patches import Patch
 
     plt = _pyplot()
@@ -207,6 +225,11 @@ def timeline(row: dict[str, Any], path: Path) -> Path:
         if width <= 1e-6:
             if bar.failed:
                 crosses.setdefault((lane, round(bar.start, 2)), []).append(bar)
+            continue
+        if _runs_alongside(bar, items):  # (a motion at the same time as a longer one, in
+            # parallel: a strip along the lane's top, so neither hides the other's name)
+            ax.barh(lane - 0.3, width, left=bar.start, height=0.16, color=colour,
+                    edgecolor=FAILED if bar.failed else colour, linewidth=0.5, zorder=4)
             continue
         ax.barh(lane, width, left=bar.start, height=0.7 if bar.depth == 0 else 0.55,
                 color=colour, edgecolor=FAILED if bar.failed else "white",
@@ -244,7 +267,7 @@ def timeline(row: dict[str, Any], path: Path) -> Path:
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=7,
               frameon=False)
     fig.tight_layout()
-    return _save(fig, path)
+    return fig
 
 
 def _short(name: str) -> str:
