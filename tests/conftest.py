@@ -24,7 +24,8 @@ needs_pybullet = pytest.mark.skipif(not HAS_PYBULLET, reason=NO_PYBULLET)
 SLOW_MODULES = {"test_python313", "test_backends", "test_bench", "test_storage", "test_trials",
                 "test_report", "test_learning", "test_user_plans", "test_results_files",
                 "test_packaging", "test_planning_scene", "test_motion_safety",
-                "test_manipulation", "test_physics_check", "test_dask", "test_process_cache"}
+                "test_manipulation", "test_physics_check", "test_dask", "test_process_cache",
+                "test_docs_code"}
 
 
 def pytest_collection_modifyitems(config, items) -> None:
