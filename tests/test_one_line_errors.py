@@ -35,3 +35,16 @@ def test_a_multi_line_exception_of_a_plugin_is_one_line(tmp_path: Path, source: 
         lines = result.stderr.strip().splitlines()
         assert result.returncode == 2 and len(lines) == 1, result.stderr
         assert expected in lines[0] and "--strategy" in lines[0]
+
+
+def test_a_failure_says_each_thing_it_tried_once_with_how_often() -> None:
+    """(#27: an ObjectUnreachable of 755 characters repeated 'could not put it down at the
+    goal' nine times.)"""
+    from cramlite.designators.failures import ObjectUnreachable
+
+    failure = ObjectUnreachable("no base pose reaches it", obj="cup",
+                                tried=["right arm top grasp: could not put it down"] * 9
+                                + ["left arm: out of reach"])
+    assert str(failure) == ("cup: no base pose reaches it (tried: right arm top grasp: could "
+                            "not put it down (9 times); left arm: out of reach)")
+    assert len(failure.as_dict()["tried"]) == 10  # (the row keeps every attempt)

@@ -14,6 +14,15 @@ from cramlite.errors import bounded_text
 TRIED_LIMIT = 50
 
 
+def said_once(entries: Sequence[str]) -> list[str]:
+    """Entries in their order, each once, with how often it was tried where more than
+    once ("could not put it down at the goal (9 times)")."""
+    counts: dict[str, int] = {}
+    for entry in entries:
+        counts[entry] = counts.get(entry, 0) + 1
+    return [f"{e} ({n} times)" if n > 1 else e for e, n in counts.items()]
+
+
 class PlanFailure(Exception):
     """A plan could not achieve something in the world (as opposed to a bug or bad input)."""
 
@@ -25,7 +34,7 @@ class PlanFailure(Exception):
         self.tried = list(tried)
         text = f"{obj}: {reason}" if obj else reason
         if self.tried:
-            text += f" (tried: {'; '.join(self.tried)})"
+            text += f" (tried: {'; '.join(said_once(self.tried))})"
         super().__init__(text)
 
     def as_dict(self) -> dict[str, object]:
