@@ -156,3 +156,24 @@ def test_a_timeline_with_a_parallel_step_has_no_overlapping_text() -> None:
         assert "Transport breakfast-cereal" in labels
     finally:
         plt.close(fig)
+
+
+def test_the_bold_path_is_coloured_in_the_order_it_was_driven() -> None:
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    from cramlite.report.figures import setup_map_figure
+    from cramlite.world.topdown import load_layout
+
+    layout = load_layout(load_setup("v1"))
+    path = [[-0.5, -1.8], [0.8, -0.5], [0.8, 0.5], [-0.3, 1.2], [0.8, 1.0]]
+    row = {"strategy": "opm", "trial": "0", "success": "True", "order": "cup",
+           "driven_path": path, "failures": []}
+    fig = setup_map_figure(layout, [row], ["opm"], {"opm": "#1f77b4"}, {"opm": row})
+    try:
+        (bold,) = [c for c in fig.axes[0].collections if isinstance(c, LineCollection)
+                   and len(c.get_segments()) == len(path) - 1]
+        whiteness = bold.get_colors()[:, :3].sum(axis=1)
+        assert np.all(np.diff(whiteness) < 0)  # (lighter first, full colour last)
+    finally:
+        plt.close(fig)

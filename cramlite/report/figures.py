@@ -8,6 +8,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from cramlite.report.trials import Bar, bars, ok
 from cramlite.world.map_labels import badge_candidates, movable, settle_labels
 from cramlite.world.topdown import Layout, draw_layout
@@ -91,7 +93,8 @@ def setup_map_figure(layout: Layout, rows: Sequence[dict[str, Any]],
                      + _wrap(" ".join(f"{k}. {n}" for k, n in enumerate(order, 1)) or
                              "no item fetched", 60))
         ax.set_title(title, fontsize=9, color=colour if best is not None else "black")
-    handles = [Line2D([], [], color=colours[s], linewidth=2.2, label=f"{s}: driven path")
+    handles = [Line2D([], [], color=colours[s], linewidth=2.2,
+                      label=f"{s}: driven path (light: early, full colour: late)")
                for s in strategies]
     handles += [Line2D([], [], color="grey", alpha=0.35, linewidth=1,
                        label="other trials (faint)"),
@@ -119,8 +122,7 @@ def _highlight(ax: Any, layout: Layout, row: dict[str, Any], colour: str) -> Non
     spots = {s.name: (s.x, s.y) for s in layout.items}
     targets = {s.name: (s.x, s.y) for s in layout.targets}
     if len(xy) > 1:
-        ax.plot(*zip(*xy, strict=True), color=colour, linewidth=2.2, zorder=5,
-                solid_capstyle="round")
+        _path_in_sequence(ax, xy, colour)
         _arrows(ax, xy, colour)
     else:  # older rows or a trial that raised: the legs start -> item -> target
         legs = [layout.start[:2]]
@@ -142,6 +144,23 @@ def _highlight(ax: Any, layout: Layout, row: dict[str, Any], colour: str) -> Non
         movable(badge, badge_candidates())
     for x, y in failed_spots(layout, row):
         ax.plot(x, y, marker="x", color=FAILED, markersize=11, markeredgewidth=2.5, zorder=11)
+
+
+def _path_in_sequence(ax: Any, xy: Sequence[Sequence[float]], colour: str) -> None:
+    """The bold path, light where it starts and full colour where it ends (by the length
+    driven), so overlapping legs can be told apart in the order they were driven."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.colors import to_rgb
+
+    points = np.asarray(xy, dtype=float)
+    segments = np.stack([points[:-1], points[1:]], axis=1)
+    lengths = np.linalg.norm(points[1:] - points[:-1], axis=1)
+    done = (np.cumsum(lengths) - lengths / 2) / max(float(lengths.sum()), 1e-9)
+    base = np.asarray(to_rgb(colour))
+    shade = 0.3 + 0.7 * done[:, None]  # (30 % of the colour at the start, all at the end)
+    colours = (1 - shade) * 1.0 + shade * base
+    ax.add_collection(LineCollection(segments, colors=colours, linewidths=2.2, zorder=5,
+                                     capstyle="round"))
 
 
 def failed_spots(layout: Layout, row: dict[str, Any]) -> list[tuple[float, float]]:
