@@ -21,7 +21,7 @@ from cramlite.cli.common import (
     EXIT_BROKEN_PIPE,
     Parser,
 )
-from cramlite.errors import UserInputError
+from cramlite.errors import UserInputError, bounded_text
 
 
 def _selected(argv: Sequence[str]) -> str | None:
@@ -78,8 +78,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 def one_line(text: str) -> str:
     """A message as one line (a plugin's exception text may hold several): its lines
     joined by " / ", and cut to 2000 characters."""
-    from cramlite.errors import bounded_text
-
     return bounded_text(" / ".join(p.strip() for p in text.splitlines() if p.strip()), 2000)
 
 

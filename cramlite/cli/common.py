@@ -138,10 +138,6 @@ def whole_number(minimum: int, maximum: int) -> Callable[[str], int]:
     return int_in_range(minimum, f"a whole number in [{minimum}, {maximum}]", maximum)
 
 
-def int_at_least(minimum: int, wording: str) -> Callable[[str], int]:
-    return int_in_range(minimum, wording)
-
-
 def float_in_range(minimum: float, maximum: float, wording: str,
                    open_minimum: bool = False) -> Callable[[str], float]:
     """An argparse type: a finite number in [minimum, maximum] ((minimum, maximum] with
@@ -180,13 +176,11 @@ def image_path(text: str) -> str:
     return text
 
 
-positive_int = int_at_least(1, "a positive integer")
-non_negative_int = int_at_least(0, "a whole number >= 0")
 seed_int = int_in_range(0, "a seed: a whole number in [0, 2^64 - 1]", MAX_SEED)
-repeats_int = int_in_range(1, f"a whole number in [1, {MAX_REPEATS}]", MAX_REPEATS)
-epochs_int = int_in_range(1, f"a whole number in [1, {MAX_EPOCHS}]", MAX_EPOCHS)
-episodes_int = int_in_range(1, f"a whole number in [1, {MAX_EPISODES}]", MAX_EPISODES)
-workers_int = int_in_range(1, f"a whole number in [1, {MAX_WORKERS}]", MAX_WORKERS)
+repeats_int = whole_number(1, MAX_REPEATS)
+epochs_int = whole_number(1, MAX_EPOCHS)
+episodes_int = whole_number(1, MAX_EPISODES)
+workers_int = whole_number(1, MAX_WORKERS)
 
 
 def writable_file(text: str, option: str) -> None:

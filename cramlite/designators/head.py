@@ -39,6 +39,7 @@ def look_at_joints(ctx: RobotContext, point: tuple[float, float, float]) -> dict
     """Head pan and tilt that point the gaze at `point` (within the joints' limits; a
     MotionPlanningFailed if the point is out of the head's reach, e.g. below its chin)."""
     joints = ctx.scene.joint_positions([PAN, TILT])
+    start_pan = joints[PAN]
     for _ in range(12):  # (a half turn takes more steps than a glance: the camera sits
         frame = ctx.scene.link_matrix(GAZE_FRAME, joints)  # off the pan axis)
         local = frame[:3, :3].T @ (np.asarray(point, dtype=float) - frame[:3, 3])
@@ -49,7 +50,7 @@ def look_at_joints(ctx: RobotContext, point: tuple[float, float, float]) -> dict
             break
     limits = ctx.scene.robot.joints
     joints[PAN] = _wrapped_into(joints[PAN], limits[PAN].lower, limits[PAN].upper,
-                                near=ctx.scene.joint_positions([PAN])[PAN])
+                                near=start_pan)
     for name, value in joints.items():
         if not limits[name].lower - 1e-9 <= value <= limits[name].upper + 1e-9:
             raise MotionPlanningFailed(

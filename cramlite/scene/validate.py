@@ -81,18 +81,19 @@ def check_setup(scene: PlanningScene) -> None:
     _check_targets(scene, collisions, kitchen, fail)
 
 
-#: The nearest base poses the location designators try, and how far the arm reaches from
-#: the base's middle in practice (they try up to 0.80 m; beyond 0.75 m few poses have IK:
-#: a spoon on the counter with the floor 0.79 m away failed, 0.73 m away it was fetched).
-REACH_MIN_M, REACH_MAX_M = 0.45, 0.75
+#: How far the arm reaches from the base's middle in practice (the location designators
+#: try base poses up to 0.80 m away; beyond 0.75 m few have IK: a spoon on the counter with
+#: the floor 0.79 m away failed, 0.73 m away it was fetched).
+REACH_MAX_M = 0.75
 
 
 def reach_problems(scene: PlanningScene) -> list[str]:
     """What the robot will not reach, one line each: every item on a surface and every
     target needs floor around it where the base can stand within an arm's reach, as the
     location designators will look for it (the PR2's base square free of the fixed world,
-    0.45-0.80 m away, facing it). A setup may hold such an item on purpose (`unreachable`
-    shows how a plan fails), so this is a warning of `show`, not an error."""
+    from their nearest standoff out, facing it). A setup may hold such an item on purpose
+    (`unreachable` shows how a plan fails), so this is a warning of `show`, not an
+    error."""
     from cramlite.designators.context import occupancy_map
     from cramlite.motion.footprint import FootprintChecker
 
@@ -119,8 +120,11 @@ def reach_problems(scene: PlanningScene) -> list[str]:
 
 def _nearest_standing(checker, x: float, y: float) -> float | None:
     """The distance from (x, y) to the nearest base pose facing it whose footprint is
-    free (rings 2.5 cm apart from 0.45 m, 72 directions), or None within 2.5 m."""
-    for radius in np.arange(REACH_MIN_M, 2.5 + 1e-9, 0.025):
+    free (rings 2.5 cm apart from the location designators' nearest standoff, 72
+    directions), or None within 2.5 m."""
+    from cramlite.designators.locations import STANDOFFS_M
+
+    for radius in np.arange(STANDOFFS_M[0], 2.5 + 1e-9, 0.025):
         for angle in np.linspace(-np.pi, np.pi, 72, endpoint=False):
             bx, by = x + radius * np.cos(angle), y + radius * np.sin(angle)
             if checker.is_free(float(bx), float(by), float(angle + np.pi)):

@@ -217,10 +217,9 @@ def _base_accelerations(trace: Trace):
     header = trace.header.get("base_limits") or {}
     pr2 = BaseLimits()
     values = {}
-    for key in BaseLimits.__dataclass_fields__:  # (the PR2's, or the header's if tighter)
-        own, given = getattr(pr2, key), header.get(key)
-        value = float(given) if isinstance(given, int | float) and math.isfinite(given) \
-            and given > 0 else own
+    for key in BaseLimits.__dataclass_fields__:  # (the PR2's, or the header's if tighter;
+        own = getattr(pr2, key)  # read_trace checked the header's are numbers > 0)
+        value = float(header.get(key, own))
         if value > own + 1e-9:
             yield Finding("header", f"base_limits {key} {value:g} beyond the PR2's {own:g}",
                           value, own, "", 0.0, 1)
