@@ -1,5 +1,6 @@
 """Every code block in the README and docs/ runs as printed (#27): the Python blocks as
-scripts, the tutorial's shell commands in a scratch folder holding a copy of examples/
+scripts, the README's tour in one empty folder, in order (`reproduce` on a tiny subset),
+the tutorial's shell commands in a scratch folder holding a copy of examples/
 (`pip install` and the plugin's names apart: installing into the test environment would
 leak into other tests; test_user_plans installs the plugin package into its own folder and
 runs those commands)."""
@@ -64,3 +65,30 @@ def test_a_tutorial_command_works_as_written(tmp_path: Path, command: list[str])
     result = subprocess.run([sys.executable, "-m", "cramlite", *command[1:]],
                             capture_output=True, text=True, cwd=tmp_path, timeout=900)
     assert result.returncode == 0, f"{' '.join(command)}:\n{result.stderr[-3000:]}"
+
+
+README_TOUR = [c for block in _blocks(ROOT / "README.md", "sh") for c in _commands(block)
+               if c[0] == "cramlite"]
+#: The full `reproduce` is a benchmark (74 s); the tour runs it on a tiny subset, as
+#: test_reproduce does, so that the command as printed is what is checked apart from size.
+TINY_REPRODUCE = ["--episodes", "10", "--setups", "v1", "--epochs", "2",
+                  "--recovery-sets", "1", "--recovery-seeds", "1", "--repeats", "2"]
+
+
+def test_the_readme_tour_runs_as_written(tmp_path: Path) -> None:
+    """The five-minute tour, in order, in one empty folder (each step uses the files of
+    the ones before it): every command ends with exit 0 and leaves what it promises."""
+    assert [c[1] for c in README_TOUR][:3] == ["show", "run", "replay"]
+    for command in README_TOUR:
+        extra = TINY_REPRODUCE if command[1] == "reproduce" else []
+        result = subprocess.run([sys.executable, "-m", "cramlite", *command[1:], *extra],
+                                capture_output=True, text=True, cwd=tmp_path, timeout=900)
+        assert result.returncode == 0, f"{' '.join(command)}:\n{result.stderr[-3000:]}"
+        if "--out" in command:
+            out = tmp_path / command[command.index("--out") + 1]
+            assert out.exists() and (out.is_dir() or out.stat().st_size > 0), command
+    assert "nothing penetrating" in subprocess.run(
+        [sys.executable, "-m", "cramlite", "replay", "v1.jsonl", "--check"],
+        capture_output=True, text=True, cwd=tmp_path).stdout
+    assert (tmp_path / "results" / "report.html").exists()
+    assert (tmp_path / "two" / "report.html").exists()
