@@ -74,6 +74,10 @@ class TrialResult:
     arm_motions: int = 0
     planned_arm_motions: int = 0
     log: list[str] = field(default_factory=list)
+    #: How many items the plan carried at once (`--carry`), and the items fetched
+    #: together on each trip, in fetch order.
+    carry: int = 1
+    trips: list[list[str]] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -108,10 +112,11 @@ class TrialRunner:
     def run(self, strategy: str = "baseline", plan: str = "set-table", seed: int = 0,
             params: dict[str, float] | None = None, dims: str = "xy",
             order: list[str] | None = None, trace: str | Path | None = None,
-            inject: dict[str, float] | None = None) -> TrialResult:
+            inject: dict[str, float] | None = None, carry: int = 1) -> TrialResult:
         """One trial; `order` replaces the setup's baseline order (for `baseline`);
         `trace`: write every executed state to this file (format cramlite-trace/2);
-        `inject`: failure probabilities by kind (cramlite.designators.injection)."""
+        `inject`: failure probabilities by kind (cramlite.designators.injection);
+        `carry`: how many items the plan carries at once (a plan option: 1 or 2)."""
         plan_fn = plan_function(plan)  # (UserInputError naming --plan if there is none)
         self.backend.reset(self._targets() if plan == "clear-table" else None)
         self.scene.reset()
@@ -126,7 +131,7 @@ class TrialRunner:
             modules = InjectingModules(self.modules, injector)
         ctx = RobotContext(scene=self.scene, modules=modules,
                            rng=np.random.default_rng([seed, 0]), options=self.options,
-                           injector=injector)
+                           injector=injector, plan_options={"carry": carry})
         ctx.observe()  # (the scene's first belief: what the process modules report)
         if trace is not None:
             ctx.open_trace(trace, self.setup_reference(), plan, strategy, seed,
@@ -160,7 +165,8 @@ class TrialRunner:
             actions=actions, driven_path=self._driven_path(ctx), arm_motions=ctx.arm_motions,
             planned_arm_motions=ctx.planned_motions, log=ctx.log,
             parallel_s=round(ctx.overlap_s, 6), simulator=self.modules.simulator_report(),
-            injected=dict(injector.injected) if injector is not None else {})
+            injected=dict(injector.injected) if injector is not None else {}, carry=carry,
+            trips=report.trips or [[name] for name in report.order])
 
     def _driven_path(self, ctx: RobotContext) -> list[list[float]]:
         from cramlite.trace.path import simplify_path

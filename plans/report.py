@@ -3,6 +3,7 @@ and (a user's plan) whether it succeeded."""
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -18,6 +19,8 @@ class PlanReport:
     #: A user's plan's own verdict (None: no failures = success). The built-in plans leave
     #: it None: the trial checks where the items ended.
     success: bool | None = None
+    #: The items fetched together on each trip, in fetch order (one each with carry 1).
+    trips: list[list[str]] = field(default_factory=list)
 
     def __repr__(self) -> str:
         verdict = "" if self.success is None else f", success={self.success}"
@@ -26,3 +29,8 @@ class PlanReport:
 
     def add_leg(self, robot_xy, item_xy, goal_xy) -> None:
         self.straight_line_m += math.dist(robot_xy, item_xy) + math.dist(item_xy, goal_xy)
+
+    def add_trip(self, robot_xy, item_xys, goal_xys) -> None:
+        """A trip's straight legs: robot -> each item in turn -> each goal in turn."""
+        points = [robot_xy, *item_xys, *goal_xys]
+        self.straight_line_m += sum(math.dist(a, b) for a, b in itertools.pairwise(points))

@@ -19,11 +19,14 @@ from cramlite.designators import (
     RobotContext,
     TransportAction,
 )
+from cramlite.designators.carrying import DeliverAction, FetchAction, Fetched
 from cramlite.designators.locations import IDEAL_STANDOFF_M
-from cramlite.designators.storage import CloseAction, container_of, is_open
+from cramlite.designators.storage import CloseAction, container_at, container_of, is_open
+from cramlite.errors import UserInputError
+from cramlite.motion.ik import ARMS
 from cramlite.strategies import Candidate, Strategy
-from cramlite.strategies.base import checked_choice, checked_reset
-from cramlite.world.pr2 import TORSO_UP_M
+from cramlite.strategies.base import checked_batch, checked_choice, checked_reset
+from cramlite.world.pr2 import HAND_PAYLOAD_KG, TORSO_UP_M
 from cramlite.world.setup import Setup
 
 
@@ -62,9 +65,13 @@ def robot_position(ctx: RobotContext) -> tuple[float, float, float]:
 
 def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
                             goals: dict[str, dict], report: PlanReport) -> PlanReport:
-    """The loop both plans share: ask, transport, record. `goals` maps each item to the
-    TransportAction arguments that say where it goes (`target` or `surface`)."""
+    """The loop both plans share: ask, carry, record. `goals` maps each item to the
+    TransportAction arguments that say where it goes (`target` or `surface`). With the
+    plan option `carry` 2 (`--carry 2`) the strategy is asked for a batch, one item per
+    hand (`choose_batch`), fetched one after the other and then delivered in that order;
+    an item that cannot share a trip (see `shares_a_trip`) is carried alone."""
     remaining = [n for n in setup.baseline_order if n in goals]
+    carry = carry_option(ctx)
     try:
         ParkArmsAction().perform(ctx)
         MoveTorsoAction(TORSO_UP_M, while_driving=True).perform(ctx)  # (with the first drive)
@@ -82,21 +89,43 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
 
     checked_reset(strategy, [item_candidate(ctx, setup, n, then_at(n)) for n in remaining],
                   robot_position(ctx))
+    alone: set[str] = set()  # (a second fetch failed with one hand full: alone next time)
     while remaining:
         candidates = [item_candidate(ctx, setup, n, then_at(n)) for n in remaining]
         here = robot_position(ctx)
-        chosen = candidates[0] if len(candidates) == 1 else \
-            checked_choice(strategy, candidates, here)
-        report.order.append(chosen.name)
-        remaining.remove(chosen.name)
-        try:
-            TransportAction(ObjectDesignatorDescription(names=[chosen.name]),
-                            **goals[chosen.name]).perform(ctx)
-        except PlanFailure as failure:
-            ctx.note(f"failed: {failure}")
-            report.failures.append(failure)
-        (x, y, _), _ = ctx.scene.object_pose(chosen.name)
-        report.add_leg(here[:2], chosen.position[:2], (x, y))
+        if len(candidates) == 1:
+            batch = candidates
+        elif carry == 1:
+            batch = [checked_choice(strategy, candidates, here)]
+        else:
+            batch = checked_batch(strategy, candidates, here, min(carry, len(ARMS)))
+            shared = [c for c in batch if c.name not in alone and
+                      shares_a_trip(ctx, c.name, goals[c.name])]
+            batch = batch[:1] if batch[0] not in shared else shared
+        names = [c.name for c in batch]
+        report.order.extend(names)
+        report.trips.append(names)
+        for name in names:
+            remaining.remove(name)
+        if len(batch) == 1:
+            try:
+                TransportAction(ObjectDesignatorDescription(names=names),
+                                **goals[names[0]]).perform(ctx)
+            except PlanFailure as failure:
+                ctx.note(f"failed: {failure}")
+                report.failures.append(failure)
+        else:
+            back = _carry_together(ctx, names, goals, report)
+            for name in back:  # (not fetched: asked about again, carried alone)
+                report.order.remove(name)
+                report.trips[-1].remove(name)
+                remaining.append(name)
+                alone.add(name)
+            if not report.trips[-1]:
+                report.trips.pop()
+        report.add_trip(here[:2], [c.position[:2] for c in batch if c.name in report.order],
+                        [ctx.scene.object_pose(c.name)[0][:2] for c in batch
+                         if c.name in report.order])
     for step in [*(CloseAction(name) for name in list(ctx.opened)), ParkArmsAction()]:
         try:  # whatever it opened is closed again, and the arms are tucked
             step.perform(ctx)
@@ -104,6 +133,58 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
             ctx.note(f"failed: {failure}")
             report.failures.append(failure)
     return report
+
+
+def carry_option(ctx: RobotContext) -> int:
+    """How many items the plan carries at once: the plan option `carry` (default 1)."""
+    carry = ctx.plan_options.get("carry", 1)
+    if isinstance(carry, bool) or not isinstance(carry, int) or not 1 <= carry <= len(ARMS):
+        raise UserInputError(f"expected 1 or {len(ARMS)} (one item per hand), got {carry!r}",
+                             field="--carry")
+    return carry
+
+
+def shares_a_trip(ctx: RobotContext, name: str, goal: dict) -> bool:
+    """Can the item be carried with another? Not if it lies in a drawer or cupboard or
+    goes into one (opening and closing needs a free hand), nor if it is heavier than one
+    of the PR2's hands can hold (`HAND_PAYLOAD_KG`): those are carried alone."""
+    if container_of(ctx, name) is not None:
+        return False
+    target = goal.get("target")
+    if target is not None and container_at(ctx, target)[0] is not None:
+        return False
+    return ctx.scene.items[name].model.mass_kg <= HAND_PAYLOAD_KG
+
+
+def _carry_together(ctx: RobotContext, names: list[str], goals: dict[str, dict],
+                    report: PlanReport) -> list[str]:
+    """Fetch each item with a free hand, then deliver them in the same order. A failed
+    first fetch is a failure of that item; after it, and after a failed later fetch, the
+    items not yet fetched are returned (the plan asks about them again and carries them
+    alone)."""
+    fetched: list[Fetched] = []
+    for index, name in enumerate(names):
+        try:
+            fetched.append(FetchAction(name, **goals[name]).perform(ctx))
+        except PlanFailure as failure:
+            if fetched:
+                ctx.note(f"could not fetch {name} with one hand full ({failure}); it is "
+                         "carried alone later")
+                back = names[index:]
+            else:
+                ctx.note(f"failed: {failure}")
+                report.failures.append(failure)
+                back = names[index + 1:]
+            break
+    else:
+        back = []
+    for item in fetched:
+        try:
+            DeliverAction(item.obj, fetched=item, **goals[item.obj]).perform(ctx)
+        except PlanFailure as failure:
+            ctx.note(f"failed: {failure}")
+            report.failures.append(failure)
+    return back
 
 
 def set_table(ctx: RobotContext, setup: Setup, strategy: Strategy) -> PlanReport:

@@ -181,6 +181,11 @@ repeats_int = whole_number(1, MAX_REPEATS)
 epochs_int = whole_number(1, MAX_EPOCHS)
 episodes_int = whole_number(1, MAX_EPISODES)
 workers_int = whole_number(1, MAX_WORKERS)
+#: --carry: items carried at once (the PR2 has two hands).
+carry_int = int_in_range(1, "1 or 2 (one item per hand)", 2)
+CARRY_HELP = ("how many items the set-table and clear-table plans carry at once: 1, or 2 "
+              "(one per hand: the strategy chooses each batch; items in drawers or the "
+              "cupboard, or bound for them, are carried alone); a plan option, default 1")
 
 
 def writable_file(text: str, option: str) -> None:

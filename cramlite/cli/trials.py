@@ -7,9 +7,11 @@ import sys
 
 from cramlite.cli.common import (
     BACKEND_HELP,
+    CARRY_HELP,
     EXIT_OK,
     EXIT_PLAN_FAILED,
     INJECT_HELP,
+    carry_int,
     chosen_backend,
     command_help,
     image_path,
@@ -128,7 +130,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         try:
             result = runner.run(args.strategy, args.plan, args.seed, params=params,
                                 dims=args.dims, trace=args.trace, order=order,
-                                inject=inject)
+                                inject=inject, carry=args.carry)
         except StrategyError as exc:  # e.g. optimal with too many items, a broken plugin
             raise UserInputError(str(exc), field="--strategy") from None
         if args.image:
@@ -148,6 +150,9 @@ def cmd_run(args: argparse.Namespace) -> int:
         missed = [n for n in result.order if n in failed]
         print(f"  order: {', '.join(delivered) or '(nothing delivered)'}"
               + (f"; tried and failed: {', '.join(missed)}" if missed else ""))
+        if result.carry > 1:
+            print(f"  carrying up to {result.carry} at once: {len(result.trips)} trips ("
+                  + "; ".join(" + ".join(trip) for trip in result.trips) + ")")
         print(f"  driven base path {result.base_path_m:.2f} m, straight-line legs "
               f"{result.straight_line_m:.2f} m")
         together = (f", {result.parallel_s:.2f} s of them at once"
@@ -253,6 +258,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                           "ends (default: each is closed as soon as its item is out or in)")
     run.add_argument("--backend", help=BACKEND_HELP)
     run.add_argument("--inject", metavar="KIND=P,...", help=INJECT_HELP)
+    run.add_argument("--carry", type=carry_int, default=1, help=CARRY_HELP)
     run.add_argument("--gui", action="store_true",
                      help="show the PyBullet GUI (the pybullet backend; needs a display)")
     run.add_argument("--json", action="store_true", help="print one JSON object")

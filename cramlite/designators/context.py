@@ -240,6 +240,9 @@ class RobotContext:
     injector: Any = None
     #: Inside a `Parallel`: joint motions wait for the next drive (see `deferring`).
     defer_joint_motions: bool = False
+    #: The plan's options, as `run` and `bench` pass them (`carry`: how many items to
+    #: carry at once); a plan reads the ones it uses.
+    plan_options: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.checker = FootprintChecker(occupancy_map(self.scene))

@@ -309,6 +309,8 @@ class ItemModel:
     #: Degrees of a turn about +z that leave it the same (0: any; 360: none): its item
     #: file's, else its shape's (an upright cylinder: any; a square box: 90; a box: 180).
     yaw_symmetry_deg: float = 360.0
+    #: Its mass (kg): the sum of its URDF links' masses.
+    mass_kg: float = 0.0
 
 
 @functools.cache
@@ -335,8 +337,9 @@ def _item_model(urdf: str, digest: str, type_: str) -> ItemModel:
     symmetry = kind.yaw_symmetry_deg
     if symmetry is None:
         symmetry = _shape_symmetry(moved)
+    mass = float(sum(inertia.mass for inertia in model.model.inertias))
     return ItemModel(type_, moved, tuple(float(v) for v in hi - lo), symmetry == 0.0,
-                     float(lo[2]), Path(urdf), kind, symmetry)
+                     float(lo[2]), Path(urdf), kind, symmetry, mass)
 
 
 def _shape_symmetry(shapes: tuple[Shape, ...]) -> float:

@@ -132,6 +132,35 @@ def checked_choice(strategy: Strategy, remaining: Sequence[Candidate],
                         "remaining candidates")
 
 
+def checked_batch(strategy: Strategy, remaining: Sequence[Candidate], agent: Sequence[float],
+                  capacity: int) -> list[Candidate]:
+    """`strategy.choose_batch(remaining, agent, capacity)`, checked like `checked_choice`:
+    between one and `capacity` distinct remaining candidates (an equal copy is fine)."""
+    if capacity == 1:
+        return [checked_choice(strategy, remaining, agent)]
+    try:
+        batch = list(strategy.choose_batch(remaining, agent, capacity))
+    except StrategyError:
+        raise
+    except Exception as exc:
+        raise StrategyCrashed(f"strategy {strategy_label(strategy)} raised "
+                              f"{type(exc).__name__} choosing a batch: {exc}") from exc
+    found = []
+    for choice in batch:
+        match = next((c for c in remaining if c is choice), None) or next(
+            (c for c in remaining if isinstance(choice, Candidate) and c == choice), None)
+        if match is None or match in found:
+            found = []
+            break
+        found.append(match)
+    if not found or len(found) > capacity:
+        shown = repr(batch)
+        shown = shown if len(shown) <= 80 else shown[:77] + "..."
+        raise StrategyCrashed(f"strategy {strategy_label(strategy)} returned {shown} as its "
+                              f"batch; expected 1 to {capacity} distinct remaining candidates")
+    return found
+
+
 class Strategy(ABC):
     """Base class of ordering strategies (subclass it for a plugin)."""
 
@@ -192,6 +221,19 @@ class Strategy(ABC):
     def tied(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> list[Candidate]:
         """The candidates this strategy would choose uniformly among (memoryless ones)."""
         return [self.choose(remaining, agent)]
+
+    def choose_batch(self, remaining: Sequence[Candidate], agent: Sequence[float],
+                     capacity: int) -> list[Candidate]:
+        """The items to carry together on the next trip, in the order they are fetched (at
+        most `capacity`, at least one). By default `choose` is asked once per free hand,
+        each time from where the agent stands now: every strategy and plugin keeps
+        working. The batch strategies (`opm-batch`...) answer this themselves."""
+        rest, batch = list(remaining), []
+        while rest and len(batch) < capacity:
+            chosen = checked_choice(self, rest, agent)
+            batch.append(chosen)
+            rest.remove(chosen)
+        return batch
 
     def costs(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> list[float] | None:
         """Weighted costs of the remaining candidates, if the strategy has any."""

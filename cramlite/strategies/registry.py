@@ -19,6 +19,12 @@ from typing import Any
 from cramlite.errors import UserInputError
 from cramlite.plugins import load_reference
 from cramlite.strategies.base import Strategy, StrategyError
+from cramlite.strategies.batch import (
+    NearestBatchStrategy,
+    OPMBatchStrategy,
+    OptimalBatchStrategy,
+    RandomBatchStrategy,
+)
 from cramlite.strategies.opm import NearestStrategy, OPMStrategy, OPMTwoStepStrategy
 from cramlite.strategies.optimal import OptimalStrategy
 from cramlite.strategies.simple import BaselineStrategy, RandomStrategy
@@ -26,7 +32,8 @@ from cramlite.strategies.simple import BaselineStrategy, RandomStrategy
 ENTRY_POINT_GROUP = "cramlite.strategies"
 BUILTIN: dict[str, type[Strategy]] = {cls.name: cls for cls in (
     OPMStrategy, BaselineStrategy, RandomStrategy, NearestStrategy, OPMTwoStepStrategy,
-    OptimalStrategy)}
+    OptimalStrategy, OPMBatchStrategy, NearestBatchStrategy, OptimalBatchStrategy,
+    RandomBatchStrategy)}
 
 
 def plugin_entry_points() -> dict[str, Any]:

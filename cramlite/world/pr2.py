@@ -60,3 +60,6 @@ PARK_JOINTS: dict[str, dict[str, float]] = {
 }
 #: Torso height for table setting (metres; the joint's range is 0 to 0.31).
 TORSO_UP_M = 0.25
+#: What one PR2 hand may hold (kg): the PR2's rated payload per arm (Willow Garage's
+#: specification, 1.8 kg). With two items carried each is held by its own hand.
+HAND_PAYLOAD_KG = 1.8
