@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from cramlite.bench.labels import base_name
 from cramlite.bench.specs import FIXED_ORDER
 
 LABELS = {"robot_time_s": "robot time (s): driving + arm motion",
@@ -46,8 +47,8 @@ def strategy_colours(strategies: Sequence[str]) -> dict[str, str]:
     import zlib
 
     out: dict[str, str] = {}
-    for name in sorted(strategies, key=lambda n: (n.split("@")[0] not in FIXED_COLOURS, n)):
-        base = name.split("@")[0]  # (opm@kinematic: opm's colour, where it is free)
+    for name in sorted(strategies, key=lambda n: (base_name(n) not in FIXED_COLOURS, n)):
+        base = base_name(name)  # (opm@kinematic: opm's colour, where it is free)
         spare = len(PALETTE) - len(FIXED_COLOURS)  # (the colours no built-in has)
         first = PALETTE.index(FIXED_COLOURS[base]) if base in FIXED_COLOURS else \
             len(FIXED_COLOURS) + zlib.crc32(base.encode()) % spare

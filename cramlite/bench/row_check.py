@@ -29,6 +29,9 @@ def row_problem(row: Mapping[str, str]) -> tuple[str, str] | None:
         value = row.get(column)
         if value is not None and not re.fullmatch(rf"[0-9]{{1,{digits}}}", value):
             return column, f"expected a whole number, got {value[:40]!r}"
+    carry = row.get("carry")
+    if carry is not None and carry not in ("1", "2"):
+        return "carry", f"expected 1 or 2, got {carry[:40]!r}"
     success = row.get("success")
     if success is not None and success not in SUCCESS_VALUES:
         return "success", f"expected True or False, got {success[:40]!r}"

@@ -61,13 +61,15 @@ class TrialSpec:
     cwd: str = ""
     #: Failures injected (`--inject`, canonical: cramlite.designators.injection); "" none.
     inject: str = ""
+    #: How many items the plan carries at once (`--carry`, a plan option).
+    carry: int = 1
 
     @property
     def key(self) -> tuple[str, ...]:
         """Identity of a trial in a results file (used to resume)."""
         return (self.setup, self.setup_hash, self.plan, self.strategy, self.code_hash,
                 " ".join(self.given_order), self.backend, str(self.trial),
-                str(self.batch_seed), self.inject)
+                str(self.batch_seed), self.inject, str(self.carry))
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -102,49 +104,56 @@ class BatchPlan:
     cwd: str = ""
     #: Failures injected into every trial (canonical `--inject` text; "" none).
     inject: str = ""
+    #: How many items the plan carries at once: each trial runs with every one of them.
+    carries: Sequence[int] = (1,)
 
     def code_hash(self, strategy: str) -> str:
         return (self.code_hashes or {}).get(strategy, "")
 
-    def _trace(self, setup: str, strategy: str, trial: int, backend: str) -> str:
+    def _trace(self, setup: str, strategy: str, trial: int, backend: str,
+               carry: int = 1) -> str:
         if not self.trace_dir:
             return ""
-        return trace_file(self.trace_dir, setup, self.plan, strategy, trial,
-                          backend if len(self.backends) > 1 else "")
+        variant = "-".join(([backend] if len(self.backends) > 1 else []) +
+                           ([f"carry{carry}"] if len(self.carries) > 1 else []))
+        return trace_file(self.trace_dir, setup, self.plan, strategy, trial, variant)
 
     def total(self) -> int:
         per_setup = self.trials * len(self.strategies)
         orders = sum(math.factorial(len(s.items)) for s in self.setups.values()) \
             if self.all_orders else 0
-        return (per_setup * len(self.setups) + orders) * len(self.backends)
+        return (per_setup * len(self.setups) + orders) * len(self.backends) * \
+            len(self.carries)
 
     def __iter__(self) -> Iterator[TrialSpec]:
         for name, entry in self.setups.items():
             for trial in range(self.trials):
                 seed = trial_seed(self.batch_seed, name, trial)
                 for strategy in self.strategies:
-                    for backend in self.backends:
+                    for backend, carry in itertools.product(self.backends, self.carries):
                         yield TrialSpec(name, entry.path, strategy, trial, seed,
                                         self.batch_seed, self.plan, (), entry.content_hash,
-                                        self._trace(name, strategy, trial, backend), backend,
-                                        self.code_hash(strategy), self.cwd, self.inject)
+                                        self._trace(name, strategy, trial, backend, carry),
+                                        backend, self.code_hash(strategy), self.cwd,
+                                        self.inject, carry)
             if self.all_orders:
                 for index, order in enumerate(itertools.permutations(entry.items)):
-                    for backend in self.backends:
+                    for backend, carry in itertools.product(self.backends, self.carries):
                         yield TrialSpec(name, entry.path, FIXED_ORDER, index,
                                         trial_seed(self.batch_seed, name, index),
                                         self.batch_seed, self.plan, tuple(order),
                                         entry.content_hash,
-                                        self._trace(name, FIXED_ORDER, index, backend),
+                                        self._trace(name, FIXED_ORDER, index, backend, carry),
                                         backend, self.code_hash(FIXED_ORDER), self.cwd,
-                                        self.inject)
+                                        self.inject, carry)
 
     def contains(self, key: Sequence[str]) -> bool:
         """Whether a results row's key (see `TrialSpec.key`) is one of this batch's trials."""
-        setup, setup_hash, plan, strategy, code, given, backend, trial, batch_seed, inject = key
+        setup, setup_hash, plan, strategy, code, given, backend, trial, batch_seed, inject, \
+            carry = key
         entry = self.setups.get(setup)
         if entry is None or entry.content_hash != setup_hash or plan != self.plan \
-                or inject != self.inject \
+                or inject != self.inject or carry not in {str(c) for c in self.carries} \
                 or code != self.code_hash(strategy) \
                 or batch_seed != str(self.batch_seed) or not trial.isdigit() \
                 or backend not in self.backends:

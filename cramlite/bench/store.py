@@ -32,20 +32,22 @@ from cramlite.file_limits import checked_file
 from cramlite.safe_json import parse_json
 
 COLUMNS = ["setup", "setup_hash", "plan", "strategy", "code_hash", "given_order", "backend",
-           "inject", "trial",
+           "inject", "carry", "trial",
            "seed", "batch_seed", "success", "order", "failures", "failure_types", "injected",
            "base_path_m", "straight_line_m", "wall_s", "drive_s", "arm_s", "open_close_s",
-           "robot_time_s", "task_time_s", "items", "actions", "driven_path", "error_type",
+           "robot_time_s", "task_time_s", "items", "actions", "driven_path", "trips", "error_type",
            "error", "worker"]
 #: Columns that measure the host's time or place, and so differ between identical runs.
 TIMING_COLUMNS = ("wall_s", "task_time_s", "worker")
 KEY_COLUMNS = ("setup", "setup_hash", "plan", "strategy", "code_hash", "given_order",
-               "backend", "trial", "batch_seed", "inject")
+               "backend", "trial", "batch_seed", "inject", "carry")
 #: What the columns mean (DEFINITIONS: robot_time_s is the robot's own time from 2 on; in
 #: 1 it was wall + driving + arm time; 3 adds code_hash, the hash of a plan file and of a
 #: learned strategy's model file; 4 adds inject, the failures injected (a key column), and
-#: injected, how many were drawn by kind). A folder of another format is not resumed into.
-RESULTS_FORMAT = 4
+#: injected, how many were drawn by kind; 5 adds carry, how many items were carried at
+#: once (a key column), and trips, the items fetched together on each trip). A folder of
+#: another format is not resumed into.
+RESULTS_FORMAT = 5
 #: Rows are synced to disk at most this often (seconds); each is written whole anyway.
 SYNC_INTERVAL_S = 1.0
 
@@ -103,7 +105,8 @@ class TrialStore:
             raise StoreMismatch(f"{self.folder} holds results of format {found} (written by "
                                 "an earlier cramlite: format 1's robot_time_s included the "
                                 "wall time, format 2 had no code_hash, format 3 no "
-                                f"inject); this cramlite writes format {RESULTS_FORMAT}; "
+                                "inject, format 4 no carry); this cramlite writes format "
+                                f"{RESULTS_FORMAT}; "
                                 "expected a new --out folder (`cramlite report` still shows "
                                 "the old one)")
         with self.path.open(newline="") as handle:

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from cramlite.bench.labels import base_name, variant
 from cramlite.bench.specs import FIXED_ORDER
 from cramlite.evaluation.metrics import edit_distance
 
@@ -71,7 +72,7 @@ def default_reference(strategies: Sequence[str]) -> str:
 def reference_strategy(rows: Sequence[dict[str, Any]], asked: str | None = None) -> str:
     """The strategy the paired tests compare with: the one asked for (`bench --reference`),
     else baseline if there are baseline trials, else the first strategy of the rows."""
-    names = list(dict.fromkeys(r["strategy"].split("@")[0] for r in rows
+    names = list(dict.fromkeys(base_name(r["strategy"]) for r in rows
                                if r["strategy"] != FIXED_ORDER))
     if asked:
         return asked
@@ -81,14 +82,13 @@ def reference_strategy(rows: Sequence[dict[str, Any]], asked: str | None = None)
 def reference_tests(rows: Sequence[dict[str, Any]], reference: str | None = None,
                     ) -> list[dict[str, Any]]:
     """The paired tests of every strategy against the reference (see `reference_strategy`;
-    on each backend: a strategy labelled `opm@kinematic` against `baseline@kinematic`)."""
+    on each backend and carry: `opm×2@kinematic` against `baseline×2@kinematic`)."""
     reference = reference_strategy(rows, reference)
     labels = sorted({r["strategy"] for r in rows} - {FIXED_ORDER})
     out = []
-    for ref in (s for s in labels if s.split("@")[0] == reference):
-        backend = ref.split("@")[1:]
+    for ref in (s for s in labels if base_name(s) == reference):
         out += [paired_tests(rows, s, ref) for s in labels
-                if s.split("@")[0] != reference and s.split("@")[1:] == backend]
+                if base_name(s) != reference and variant(s) == variant(ref)]
     return out
 
 
@@ -151,7 +151,8 @@ def order_percentiles(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[str, Any]],
                   percentiles: list[dict[str, Any]],
                   agreement: Sequence[dict[str, Any]] = (),
-                  injection: Sequence[dict[str, Any]] = ()) -> str:
+                  injection: Sequence[dict[str, Any]] = (),
+                  carrying: Sequence[dict[str, Any]] = ()) -> str:
     """summary.csv and summary.md; returns the Markdown (also printed). `agreement`: the
     backends side by side (`cramlite.bench.agreement`), when the bench ran on several."""
     if summary:
@@ -193,6 +194,9 @@ def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[
 
     lines += agreement_markdown(agreement)
     lines += injection_markdown(injection)
+    from cramlite.bench.carrying import carry_markdown
+
+    lines += carry_markdown(carrying)
     for test in tests:
         lines += ["", f"Wilcoxon signed-rank, {test['strategy']} vs {test['reference']} "
                       f"({test['pairs']} pairs by setup and trial):"]

@@ -102,7 +102,7 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
 
         result = runner.run(strategy, plan, spec.seed,
                             order=list(spec.given_order) or None, trace=spec.trace or None,
-                            inject=parse_inject(spec.inject))
+                            inject=parse_inject(spec.inject), carry=spec.carry)
     except (Exception, SystemExit, KeyboardInterrupt) as exc:  # recorded, the batch goes on
         if isinstance(exc, KeyboardInterrupt) and not _interrupts_are_code():
             raise  # (a real Ctrl-C to a process that takes it: stop)
@@ -122,7 +122,8 @@ def _run_locked(spec: TrialSpec, row: dict[str, Any]) -> dict[str, Any]:
                task_time_s=result.task_time_s,
                items=json.dumps(result.items),
                actions=json.dumps(actions_only(result.actions), separators=(",", ":")),
-               driven_path=json.dumps(result.driven_path, separators=(",", ":")))
+               driven_path=json.dumps(result.driven_path, separators=(",", ":")),
+               trips=json.dumps(result.trips, separators=(",", ":")))
     return row
 
 
@@ -139,6 +140,7 @@ def base_row(spec: TrialSpec) -> dict[str, Any]:
             "strategy": spec.strategy, "code_hash": spec.code_hash,
             "given_order": " ".join(spec.given_order),
             "backend": spec.backend, "inject": spec.inject, "injected": "{}",
+            "carry": spec.carry, "trips": "[]",
             "trial": spec.trial, "seed": spec.seed, "batch_seed": spec.batch_seed,
             "success": False, "order": "", "failures": "[]", "failure_types": "",
             "base_path_m": "", "straight_line_m": "", "wall_s": "", "drive_s": "", "arm_s": "",

@@ -7,6 +7,7 @@ import os
 
 from cramlite.cli.common import (
     BACKEND_HELP,
+    CARRY_HELP,
     EXIT_OK,
     EXIT_PLAN_FAILED,
     INJECT_HELP,
@@ -167,6 +168,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     args.reference = args.reference or default_reference(strategies)
     plan_function(args.plan)  # (a plan that cannot load: one line, exit 2, before any trial)
     args.backends = _backends(args)
+    args.carry = _carries(args.carry)
     workers = _workers(args)
     args.workers = workers  # (the metadata and the report show the number used)
     setups = _setups(args.setups)
@@ -183,6 +185,15 @@ def cmd_bench(args: argparse.Namespace) -> int:
         return _run(args, strategies, setups, workers, out)
     finally:
         lock.release()
+
+
+def _carries(text: str) -> list[int]:
+    """--carry 1, 2 or 1,2: distinct, each 1 or 2, in the order given."""
+    parts = [part.strip() for part in str(text).split(",")]
+    if not parts or any(p not in ("1", "2") for p in parts) or len(set(parts)) < len(parts):
+        raise UserInputError(f"expected 1, 2 or 1,2 (items carried at once: one per hand), "
+                             f"got {text!r}", field="--carry")
+    return [int(p) for p in parts]
 
 
 def _run(args, strategies, setups, workers, out) -> int:
@@ -221,13 +232,15 @@ def _run(args, strategies, setups, workers, out) -> int:
                       for n, s in setups.items()}, strategies, args.trials, args.seed,
                      args.plan, args.all_orders,
                      str(out / "traces") if args.traces else "", tuple(args.backends), code,
-                     os.getcwd(), args.inject_text)
+                     os.getcwd(), args.inject_text, tuple(args.carry))
     done = {key for key in store.done_keys() if plan.contains(key)}
     total = plan.total()
     store.write_metadata({k: v for k, v in vars(args).items() if k != "func"}, args.executor)
     where = (f"Dask scheduler {args.scheduler}" if args.scheduler
              else f"{workers} worker(s), executor {args.executor}")
     where += f", backend {', '.join(args.backends)}"
+    if args.carry != [1]:
+        where += f", carrying {' and '.join(map(str, args.carry))} at once"
     progress = Progress(total - len(done), already=len(done))
     progress.say(f"{total} trials ({len(done)} already in {store.path}), {where}, trial "
                  f"timeout {args.trial_timeout:g} s")
@@ -261,9 +274,10 @@ def _run(args, strategies, setups, workers, out) -> int:
     summary = summarise(rows, {n: s.baseline_order for n, s in setups.items()})
     tests = reference_tests(rows, args.reference)
     from cramlite.bench.agreement import backend_agreement, injection_counts
+    from cramlite.bench.carrying import carry_savings
 
     text = write_summary(out, summary, tests, order_percentiles(rows) if args.all_orders else [],
-                         backend_agreement(rows), injection_counts(rows))
+                         backend_agreement(rows), injection_counts(rows), carry_savings(rows))
     from cramlite.bench.plots import write_plots
 
     plots = [] if args.no_plots else write_plots(rows, out)
@@ -339,6 +353,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     bench.add_argument("--backend", help=BACKEND_HELP)
     bench.add_argument("--inject", metavar="KIND=P,...", help=INJECT_HELP + " (part of "
                        "each trial's key: a resume runs only the same injection)")
+    bench.add_argument("--carry", default="1", metavar="N[,N]",
+                       help=CARRY_HELP.replace("a plan option, default 1", "a plan option "
+                       "and part of each trial's key; 1,2 runs every trial with each and the "
+                       "report compares two hands with one; default 1"))
     bench.add_argument("--backends", dest="backends_list", metavar="A,B",
                        help="run every trial on each of these backends (the report puts "
                             "them side by side)")

@@ -43,6 +43,9 @@ def build_report(folder: str | Path, *, figures: bool = True,
 
     page.agreement = backend_agreement(rows)
     page.injection = injection_counts(rows)
+    from cramlite.bench.carrying import carry_savings
+
+    page.carrying = carry_savings(rows)
     page.interest, page.failed_left_out = trials_of_interest(rows)
     media = data.path / MEDIA
     try:

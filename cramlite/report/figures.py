@@ -86,11 +86,10 @@ def setup_map_figure(layout: Layout, rows: Sequence[dict[str, Any]],
         title = f"{strategy}: no trial yet"
         if best is not None:
             _highlight(ax, layout, best, colour)
-            order = best["order"].split()
             status = "succeeded" if ok(best) else "FAILED"
             title = (f"{strategy}, trial {best['trial']} ({status}, bold; "
                      f"{len(mine)} trial{'s' * (len(mine) != 1)} in all)\n"
-                     + _wrap(" ".join(f"{k}. {n}" for k, n in enumerate(order, 1)) or
+                     + _wrap(" ".join(f"{k}. {n}" for n, k in fetch_labels(best)) or
                              "no item fetched", 60))
         ax.set_title(title, fontsize=9, color=colour if best is not None else "black")
     handles = [Line2D([], [], color=colours[s], linewidth=2.2,
@@ -102,7 +101,8 @@ def setup_map_figure(layout: Layout, rows: Sequence[dict[str, Any]],
                        label="straight legs (no driven path recorded)"),
                 Line2D([], [], marker="o", linestyle="none", markerfacecolor="white",
                        markeredgecolor="grey", markersize=9,
-                       label="n = fetched n-th (bold trial)"),
+                       label="n = fetched n-th (bold trial); 2a, 2b: carried together "
+                             "on trip 2"),
                 Line2D([], [], marker="x", linestyle="none", color=FAILED,
                        label="what a failed trial could not do (item, drawer)")]
     from cramlite.world.topdown import legend_handles
@@ -112,6 +112,29 @@ def setup_map_figure(layout: Layout, rows: Sequence[dict[str, Any]],
     fig.set_dpi(MAP_DPI)
     settle_labels(fig)
     return fig
+
+
+def fetch_labels(row: dict[str, Any]) -> list[tuple[str, str]]:
+    """(item, its number on the map) in fetch order: 1, 2, 3... or, where a trip carried
+    several items (`--carry 2`), the trip's number and a letter per item: 1a, 1b, 2a..."""
+    order = str(row.get("order") or "").split()
+    trips = row.get("trips") or []
+    if isinstance(trips, str):
+        from cramlite.safe_json import parse_json
+
+        try:
+            trips = parse_json(trips) if trips else []
+        except ValueError:
+            trips = []
+    if not isinstance(trips, list) or not any(isinstance(t, list) and len(t) > 1
+                                              for t in trips):
+        return [(name, str(k)) for k, name in enumerate(order, 1)]
+    out = []
+    for k, trip in enumerate(trips, 1):
+        names = [str(n) for n in trip] if isinstance(trip, list) else []
+        out += [(name, f"{k}{'abcdefgh'[i]}" if len(names) > 1 else str(k))
+                for i, name in enumerate(names[:8])]
+    return out
 
 
 def _highlight(ax: Any, layout: Layout, row: dict[str, Any], colour: str) -> None:
@@ -132,7 +155,7 @@ def _highlight(ax: Any, layout: Layout, row: dict[str, Any], colour: str) -> Non
         if len(legs) > 1:
             ax.plot(*zip(*legs, strict=True), color=colour, linewidth=1.4, linestyle="--",
                     zorder=5)
-    for k, name in enumerate(order, 1):
+    for name, k in fetch_labels(row):
         if name not in spots:
             continue
         x, y = spots[name]

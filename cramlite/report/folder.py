@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from cramlite.bench.labels import by_backend, several_backends
+from cramlite.bench.labels import by_backend, several_backends, several_carries
 from cramlite.bench.row_check import row_problem
 from cramlite.bench.specs import FIXED_ORDER, trace_file
 from cramlite.errors import UserInputError
@@ -85,7 +85,8 @@ def read_folder(path: str | Path, running: bool | None = None) -> BenchFolder:
     arguments = metadata.get("arguments") if isinstance(metadata.get("arguments"), dict) \
         else {}
     strategies = {r["strategy"] for r in rows}
-    if not several_backends(rows):  # (the strategies asked for, also those with no row yet)
+    if not several_backends(rows) and not several_carries(rows):  # (the strategies asked
+        # for, also those with no row yet)
         strategies |= set(_names(arguments.get("strategies")))
     result = BenchFolder(folder, rows, metadata, {},
                          strategies=sorted(strategies - {FIXED_ORDER}))

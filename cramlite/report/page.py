@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from cramlite.bench.labels import base_name
 from cramlite.bench.plots import BOX_LEGEND
 from cramlite.bench.specs import FIXED_ORDER
 from cramlite.bench.summary import MEASURES
@@ -72,6 +73,8 @@ class PageData:
     agreement: list[dict[str, Any]] = field(default_factory=list)
     #: Failures injected (`bench --inject`), per strategy (`cramlite.bench.agreement`).
     injection: list[dict[str, Any]] = field(default_factory=list)
+    #: Two hands against one (`bench --carry 1,2`; `cramlite.bench.carrying`).
+    carrying: list[dict[str, Any]] = field(default_factory=list)
 
 
 def e(value: Any) -> str:
@@ -121,8 +124,12 @@ def render_page(data: PageData) -> str:
                  + "</nav>")
     if data.agreement:
         links.insert(2, ("backends", "Backends"))
-    parts += [_run(folder), _summary(data), _agreement(data), _injection(data), _tests(data),
-              _plots(data)]
+    if data.carrying:
+        links.insert(2, ("two-hands", "Two hands"))
+    parts[-1:] = ["<nav>" + "".join(f'<a href="#{e(a)}">{e(t)}</a>' for a, t in links)
+                  + "</nav>"]
+    parts += [_run(folder), _summary(data), _carrying(data), _agreement(data),
+              _injection(data), _tests(data), _plots(data)]
     parts += [_setup(data, s) for s in setups]
     parts += [_all_orders(data), _failures(data), "</body></html>\n"]
     return "\n".join(p for p in parts if p)
@@ -154,6 +161,8 @@ def rerun_command(row: dict[str, Any], setup: Any = None) -> str:
         words += ["--backend", row["backend"]]
     if row.get("inject"):
         words += ["--inject", row["inject"]]
+    if str(row.get("carry") or 1) != "1":
+        words += ["--carry", str(row["carry"])]
     return shlex.join(words)
 
 
@@ -282,6 +291,41 @@ def _agreement(data: PageData) -> str:
             + "</table>")
 
 
+def _carrying(data: PageData) -> str:
+    """What two hands save against one, per strategy, per setup and pooled."""
+    if not data.carrying:
+        return ""
+    from cramlite.bench.carrying import POOLED
+
+    several = len({x["backend"] for x in data.carrying}) > 1
+
+    def row(x: dict[str, Any]) -> str:
+        pooled = x["setup"] == POOLED
+        share = 100 * x["robot_time_s_saved"] / x["robot_time_s_one"] \
+            if x["robot_time_s_one"] else float("nan")
+        name = f"{x['strategy']}@{x['backend']}" if several else x["strategy"]
+        cells = [e(name), f"<b>{e(x['setup'])}</b>" if pooled else e(x["setup"]),
+                 str(x["pairs"]),
+                 f"{num(x['robot_time_s_one'], 1)} → {num(x['robot_time_s_two'], 1)}",
+                 num(x["robot_time_s_saved"], 1), f"{num(share, 1)} %",
+                 f"{num(x['base_path_m_one'])} → {num(x['base_path_m_two'])}",
+                 num(x["base_path_m_saved"]),
+                 f"{num(x['trips_one'], 1)} → {num(x['trips_two'], 1)}",
+                 _p(x.get("robot_time_s_p")) if pooled else "",
+                 _p(x.get("base_path_m_p")) if pooled else ""]
+        return "<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>"
+
+    return ('<h2 id="two-hands">Two hands against one</h2><p class="note">Each trial run '
+            "with <code>--carry 1</code> and <code>--carry 2</code> is a pair (same setup, "
+            "strategy, trial and seed; both successful). Saved = carry 1 minus carry 2, the "
+            "mean over the pairs; p: Wilcoxon signed-rank over the pairs pooled over setups "
+            "(5 pairs alone cannot go below p = 0.0625).</p><table><tr><th>strategy</th>"
+            "<th>setup</th><th>pairs</th><th>robot time s (1 → 2)</th><th>saved s</th>"
+            "<th>saved</th><th>driven path m (1 → 2)</th><th>saved m</th><th>trips (1 → 2)"
+            "</th><th>p robot time</th><th>p path</th></tr>"
+            + "".join(row(x) for x in data.carrying) + "</table>")
+
+
 def _injection(data: PageData) -> str:
     """What `--inject` did: failures drawn, trials recovered, items lost, per strategy."""
     if not data.injection:
@@ -306,7 +350,7 @@ def _tests(data: PageData) -> str:
                 "compare each strategy with a reference (<code>bench --reference</code>; "
                 "default baseline, else the first strategy), and this folder holds no other "
                 "strategy, or no successful pairs.</p>")
-    reference = e(data.tests[0]["reference"].split("@")[0])
+    reference = e(base_name(data.tests[0]["reference"]))
     rows = []
     for test in data.tests:
         for measure in MEASURES[1:]:
