@@ -29,9 +29,11 @@ order. A request is one JSON object:
    "seed": 0,                                tie-breaks, an integer in [0, 2^64 - 1]
    "then_at": [x, y, z],                     default then_at of every item
    "full_order": true,                       false: next and costs only
+   "capacity": 2,                            items carried together (1-16): adds "batch"
    "id": "r1"}                               echoed in the reply
 
-The reply is one line of strict JSON: {"id", "next", "costs": {name: cost}, "order"}.
+The reply is one line of strict JSON: {"id", "next", "costs": {name: cost}, "order"},
+and with "capacity" also "batch": the items to carry together next, in fetch order.
 Coordinates must lie within +-1e6 m. Limits: 100000 items per request; the full order
 (each step repeats the query, so it is quadratic) for at most 200 items: above that,
 send "full_order": false, which answers in time linear in the number of items.

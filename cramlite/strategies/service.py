@@ -4,10 +4,13 @@ Request (see `cramlite order --help`):
     {"robot": [x, y, z], "items": [{"name": ..., "position": [x, y, z],
       "k": 0.3 | "category": "mid", "c": 1.7 | "contained": true}, ...],
      "strategy": "opm", "params": {...}, "dims": "xy", "form": "power", "seed": 0,
-     "then_at": [x, y, z], "weights": [wx, wy, wz] | "span", "full_order": true, "id": ...}
+     "then_at": [x, y, z], "weights": [wx, wy, wz] | "span", "full_order": true,
+     "capacity": 2, "id": ...}
 Reply: {"next": NAME, "costs": {NAME: cost}, "order": [NAME, ...]} where `order` repeats
 the query, the agent moving to `then_at` after each item if given, else to the item
-(`"full_order": false` leaves it out). A request's `id` is echoed in its reply.
+(`"full_order": false` leaves it out). With "capacity": N the reply adds "batch": the
+items to carry together next, in fetch order (the strategy's `choose_batch`; "next" is
+as without it). A request's `id` is echoed in its reply.
 
 Limits, so that every request is answered quickly and every reply is strict JSON:
 coordinates within +-MAX_COORDINATE_M, k in K_RANGE, c in C_RANGE, weights in
@@ -27,6 +30,7 @@ from cramlite.errors import UserInputError
 from cramlite.strategies.base import (
     MAX_COORDINATE_M,
     StrategyError,
+    checked_batch,
     checked_choice,
     parameter_problem,
     strategy_label,
@@ -36,7 +40,7 @@ from cramlite.strategies.cost import DIMS, FORMS
 from cramlite.strategies.registry import make_strategy
 
 REQUEST_KEYS = {"robot", "items", "strategy", "params", "dims", "form", "seed", "then_at",
-                "weights", "full_order", "id"}
+                "weights", "full_order", "id", "capacity"}
 ITEM_KEYS = {"name", "position", "k", "category", "c", "contained", "then_at"}
 #: Most items one request may hold, and most for which the full order is computed.
 MAX_ITEMS = 100_000
@@ -46,6 +50,8 @@ MAX_REQUEST_BYTES = 32 * 1024 * 1024
 MAX_NAME_CHARS = 256
 MAX_WEIGHT = 1000.0
 MAX_SEED = 2**64 - 1
+#: Most items one batch request may ask to carry together.
+MAX_CAPACITY = 16
 
 
 class RequestError(UserInputError):
@@ -215,9 +221,14 @@ def parse_request(request: Any) -> dict[str, Any]:
     seed = request.get("seed", 0)
     if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed <= MAX_SEED:
         raise _fail("seed", f"expected an integer in [0, 2^64 - 1], got {_show(seed)}")
+    capacity = request.get("capacity")
+    if capacity is not None and (not isinstance(capacity, int) or isinstance(capacity, bool)
+                                 or not 1 <= capacity <= MAX_CAPACITY):
+        raise _fail("capacity", f"expected an integer in [1, {MAX_CAPACITY}] (items carried "
+                                f"together, e.g. 2: one per hand), got {_show(capacity)}")
     return {"robot": robot, "candidates": candidates, "strategy": strategy, "params": checked,
             "dims": dims, "form": form, "weights": weights, "seed": seed, "then_at": then_at,
-            "full_order": full_order, "id": request_id(request)}
+            "full_order": full_order, "id": request_id(request), "capacity": capacity}
 
 
 def answer(request: Any, default_strategy: str = "opm") -> dict[str, Any]:
@@ -226,15 +237,24 @@ def answer(request: Any, default_strategy: str = "opm") -> dict[str, Any]:
     any strategy the command line accepts."""
     req = parse_request(request)
     name = req["strategy"] or default_strategy
-    try:
-        strategy = make_strategy(name, registered_only=name != default_strategy,
+
+    def made() -> Any:
+        try:
+            return make_strategy(name, registered_only=name != default_strategy,
                                  params=req["params"], dims=req["dims"], form=req["form"],
                                  axis_weights=req["weights"], rng=req["seed"])
-    except StrategyError as exc:
-        raise _fail("strategy", str(exc)) from None
+        except StrategyError as exc:
+            raise _fail("strategy", str(exc)) from None
+
+    strategy = made()
     candidates, agent = req["candidates"], req["robot"]
     reply: dict[str, Any] = {} if req["id"] is None else {"id": req["id"]}
     try:
+        if req["capacity"] is not None:  # (its own instance: "next" stays as without it)
+            batcher = made()
+            batcher.reset(candidates, agent)
+            reply["batch"] = [c.name for c in checked_batch(batcher, candidates, agent,
+                                                              req["capacity"])]
         strategy.reset(candidates, agent)
         values = strategy.costs(candidates, agent)
         if not req["full_order"]:
