@@ -23,7 +23,7 @@ from tests.conftest import ROOT
 def row(trial: int, error: str = "") -> dict[str, str]:
     out = dict.fromkeys(COLUMNS, "x")
     out.update(trial=str(trial), error=error, setup="v1", strategy="boom", seed="7",
-               batch_seed="0", success="False", **dict.fromkeys(MEASURE_COLUMNS, ""))
+               batch_seed="0", success="False", carry="1", **dict.fromkeys(MEASURE_COLUMNS, ""))
     return out
 
 
