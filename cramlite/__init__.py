@@ -33,6 +33,7 @@ _EXPORTS = {
     "RobotState": "cramlite.designators", "LookAtAction": "cramlite.designators",
     "DetectAction": "cramlite.designators",
     "SetGripperAction": "cramlite.designators", "PickAndPlaceAction": "cramlite.designators",
+    "FetchAction": "cramlite.designators", "DeliverAction": "cramlite.designators",
     "OpenAction": "cramlite.designators.storage", "CloseAction": "cramlite.designators.storage",
     "PlanReport": "cramlite.plans",
     # strategies

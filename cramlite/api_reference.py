@@ -29,7 +29,8 @@ SECTIONS: list[tuple[str, list[tuple[str, str]]]] = [
     ("Action designators", [
         ("cramlite.designators", n) for n in (
             "NavigateAction", "PickUpAction", "PlaceAction", "TransportAction",
-            "PickAndPlaceAction", "ParkArmsAction", "MoveTorsoAction", "SetGripperAction",
+            "FetchAction", "DeliverAction", "PickAndPlaceAction", "ParkArmsAction",
+            "MoveTorsoAction", "SetGripperAction",
             "LookAtAction", "DetectAction")] + [
         ("cramlite.designators.storage", "OpenAction"),
         ("cramlite.designators.storage", "CloseAction")]),

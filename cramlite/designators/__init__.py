@@ -12,6 +12,7 @@ from cramlite.designators.actions import (
     SetGripperAction,
     TransportAction,
 )
+from cramlite.designators.carrying import DeliverAction, FetchAction, Fetched
 from cramlite.designators.context import ExecutionOptions, RobotContext, simulated_robot
 from cramlite.designators.failures import (
     GraspFailed,
@@ -61,5 +62,6 @@ __all__ = [
     "ProcessModules", "ReachablePose", "RobotContext", "Sequential",
     "TransportAction", "TryInOrder", "simulated_robot", "Code", "Monitor", "MonitorFired",
     "Parallel", "Repeat", "Retry", "RobotState", "TryAll", "retry", "LookAtAction",
-    "SetGripperAction", "PickAndPlaceAction", "DetectAction",
+    "SetGripperAction", "PickAndPlaceAction", "DetectAction", "FetchAction", "DeliverAction",
+    "Fetched",
 ]

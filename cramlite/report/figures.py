@@ -15,7 +15,8 @@ from cramlite.world.map_labels import badge_candidates, movable, settle_labels
 from cramlite.world.topdown import Layout, draw_layout
 
 #: Colours of the actions on timelines (others: ACTION_OTHER).
-ACTION_COLOURS = {"TransportAction": "#e3e3e3", "NavigateAction": "#4e79a7",
+ACTION_COLOURS = {"TransportAction": "#e3e3e3", "FetchAction": "#e3e3e3",
+                  "DeliverAction": "#d5d5d5", "NavigateAction": "#4e79a7",
                   "PickUpAction": "#59a14f", "PlaceAction": "#f28e2b",
                   "OpenAction": "#b07aa1", "CloseAction": "#9c755f",
                   "ParkArmsAction": "#bab0ac", "MoveTorsoAction": "#edc948"}

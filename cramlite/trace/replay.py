@@ -39,7 +39,8 @@ DOING = {"NavigateAction": "driving", "PickUpAction": "picking up", "PlaceAction
          "putting down", "OpenAction": "opening", "CloseAction": "closing",
          "ParkArmsAction": "parking the arms", "MoveTorsoAction": "moving the torso",
          "LookAtAction": "looking at", "DetectAction": "looking for", "SetGripperAction":
-         "moving a gripper", "TransportAction": "fetching", "PickAndPlaceAction":
+         "moving a gripper", "TransportAction": "fetching", "FetchAction": "fetching",
+         "DeliverAction": "delivering", "PickAndPlaceAction":
          "moving"}
 
 
