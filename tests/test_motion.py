@@ -122,6 +122,35 @@ def test_ompl_is_reproducible_by_seed_and_reports_no_path(planner) -> None:
     assert base_planner.plan(start, inside_counter, np.random.default_rng(0)) is None
 
 
+def test_a_slower_machine_plans_the_same_base_path(planner) -> None:
+    """The base planner's search is bounded by its footprint checks, not by the clock:
+    with every check 5 ms slower (a loaded machine), the same seed gives the same path."""
+    import time
+
+    from cramlite.motion import BaseMotionPlanner
+
+    base_planner, checker = planner
+    start, goal = (-0.3, 0.1, 0.0), (-1.95, 1.7, math.pi / 2)
+    fast = base_planner.plan(start, goal, np.random.default_rng(3))
+
+    class Slow:
+        def __init__(self, inner):
+            self.inner = inner
+            self.occupancy = inner.occupancy
+
+        def is_free(self, *pose):
+            time.sleep(0.005)
+            return self.inner.is_free(*pose)
+
+    slow = BaseMotionPlanner(Slow(checker), base_planner.options)
+    begin = time.perf_counter()
+    again = slow.plan(start, goal, np.random.default_rng(3))
+    spent = time.perf_counter() - begin
+    print("slowed planning", round(spent, 2), "s")
+    assert spent > 1.0  # (longer than the old budget of one second)
+    assert again is not None and again.waypoints == fast.waypoints
+
+
 def test_footprint_respects_yaw(planner) -> None:
     _, checker = planner
     # 3 cm from the island's near edge facing it: free; turned 45 degrees the corners hit

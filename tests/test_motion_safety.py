@@ -112,6 +112,34 @@ def test_ompl_plans_a_joint_space_path_around_the_island(world) -> None:
         assert again.vertices == pytest.approx(path.vertices)
 
 
+def test_a_slower_machine_plans_the_same_arm_path(world) -> None:
+    """OMPL's search is bounded by the work of its checks, not by the host's clock: every
+    check made 6 ms slower (a loaded machine), the same seed plans the same path (with a
+    budget of 1 s it found none: a CI run failed so)."""
+    with simulated_robot(world, seed=5) as ctx:
+        stand_beside_island(ctx, world)
+        scene = ctx.collisions.check(list(RIGHT_ARM))
+        planner = ArmMotionPlanner(ctx.limits)
+        fast = planner.plan(scene, np.array(BELOW_EDGE), np.array(OVER_TOP),
+                            np.random.default_rng(0))
+        assert fast is not None and fast.planned
+        checked = scene.checks
+        is_free = scene.is_free
+
+        def slow(q, margin_m=0.0):
+            time.sleep(0.006)
+            return is_free(q, margin_m)
+
+        scene.is_free = slow
+        begin = time.perf_counter()
+        again = planner.plan(scene, np.array(BELOW_EDGE), np.array(OVER_TOP),
+                             np.random.default_rng(0))
+        spent = time.perf_counter() - begin
+        print("checks", checked, "slowed planning", round(spent, 2), "s")
+        assert spent > 1.0  # (longer than the old budget of one second)
+        assert again is not None and again.vertices == pytest.approx(fast.vertices)
+
+
 def test_a_goal_inside_furniture_is_a_typed_failure(world) -> None:
     with simulated_robot(world) as ctx:
         stand_beside_island(ctx, world)

@@ -183,7 +183,7 @@ def _why(scene, start: np.ndarray, goal: np.ndarray, ctx: RobotContext) -> str:
     contacts = scene.contacts(goal)
     if contacts:
         return f": at the goal {contacts[0].describe()}"
-    return (f" within {ctx.arm_planner.options.time_limit_s:.1f} s "
+    return (f" within {ctx.arm_planner.options.max_work:,} checks "
             "(the straight path collides and OMPL found no detour)")
 
 

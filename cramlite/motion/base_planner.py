@@ -19,6 +19,7 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
+from cramlite.motion.budget import CheckBudget
 from cramlite.motion.footprint import FootprintChecker
 from cramlite.motion.trajectory import MAX_BASE_STEP_M, MAX_BASE_TURN_RAD, wrap_angle
 
@@ -27,7 +28,10 @@ BasePose = tuple[float, float, float]  # x, y, yaw
 
 @dataclass(frozen=True)
 class BasePlannerOptions:
-    time_limit_s: float = 1.0
+    #: OMPL's search ends after this many footprint checks (about 30 us each on the
+    #: 2-core machine; a budget in work, not seconds, makes a plan's outcome the seed's
+    #: alone: `motion.budget`). A query in v1-v5 and c1-c3 needs at most ~330.
+    max_checks: int = 20_000
     #: False: reduce vertices and rope-shortcut (~10 ms); True: OMPL's full `simplify`
     #: (~60 ms here, paths ~8 % shorter on detours).
     full_simplify: bool = False
@@ -71,7 +75,8 @@ class BaseMotionPlanner:
         ou.setLogLevel(ou.LOG_WARN)  # OMPL logs to stdout otherwise
 
     def plan(self, start: BasePose, goal: BasePose, rng: np.random.Generator) -> BasePath | None:
-        """A free path from start to goal, or None if there is none (within the time limit)."""
+        """A free path from start to goal, or None if there is none (within the budget of
+        checks)."""
         start = (start[0], start[1], wrap_angle(start[2]))
         goal = (goal[0], goal[1], wrap_angle(goal[2]))
         if not (self.checker.is_free(*start) and self.checker.is_free(*goal)):
@@ -131,7 +136,9 @@ class BaseMotionPlanner:
         space.setBounds(bounds)
         si = ob.SpaceInformation(space)
         is_free = self.checker.is_free
-        si.setStateValidityChecker(lambda s: is_free(s.getX(), s.getY(), s.getYaw()))
+        budget = CheckBudget(lambda s: is_free(s.getX(), s.getY(), s.getYaw()),
+                             self.options.max_checks)
+        si.setStateValidityChecker(budget)
         si.setStateValidityCheckingResolution(resolution)
         si.setup()
         s, g = si.allocState(), si.allocState()
@@ -147,7 +154,7 @@ class BaseMotionPlanner:
             planner.setRange(self.options.range_m)
         planner.setProblemDefinition(pdef)
         planner.setup()
-        status = planner.solve(self.options.time_limit_s)
+        status = planner.solve(budget.condition())
         if status.getStatus() != ob.PlannerStatus.EXACT_SOLUTION:
             return None
         path = pdef.getSolutionPath()

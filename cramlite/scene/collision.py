@@ -372,6 +372,8 @@ class MotionCheck:
         self.base = tuple(base or scene.base)
         self.base_matrix = planar(*self.base)
         self.checks = 0
+        #: exact (narrow-phase) pair tests made
+        self.narrow = 0
         self.held = held
         layout = owner.layout(joints, held, ignore, self_collision)
         self.layout = layout
@@ -653,6 +655,7 @@ class MotionCheck:
         `margin` further apart)? `nested()`: may one lie wholly inside the other (a
         cheap necessary condition, asked before the exact `enclosed`)?"""
         owner = self.owner
+        self.narrow += 1
         clearance = margin - allowance  # > 0: they must be this far apart
         meshes = a.kind == MESH or b.kind == MESH
         result = coal.CollisionResult()

@@ -1,0 +1,46 @@
+"""A planner's budget counted in work done, not seconds.
+
+OMPL's `solve(seconds)` stops on the host's clock: on a loaded machine the same query with
+the same seed finds a path on one run and fails on the next (a CI run failed that way), so
+a trial's seed alone would not decide its result. Counting the work the planner's
+state-validity checks do instead makes a query's outcome a function of its seed; a slower
+machine only takes longer.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from ompl import base as ob
+
+
+class CheckBudget:
+    """Wraps a validity function and counts its work: one unit a state checked, plus
+    what `extra()` adds (e.g. the exact pair tests those checks made, which cost about as
+    much as a state's broadphase each). `condition()` ends the planner's search once
+    `max_work` units are spent."""
+
+    def __init__(self, valid: Callable[..., bool], max_work: int,
+                 extra: Callable[[], int] | None = None):
+        self._valid = valid
+        self.max_work = max_work
+        self.states = 0
+        self._extra = extra
+        self._extra_start = extra() if extra is not None else 0
+
+    def __call__(self, state) -> bool:
+        self.states += 1
+        return self._valid(state)
+
+    @property
+    def used(self) -> int:
+        """Work spent so far."""
+        extra = self._extra() - self._extra_start if self._extra is not None else 0
+        return self.states + extra
+
+    def exhausted(self) -> bool:
+        return self.used >= self.max_work
+
+    def condition(self) -> ob.PlannerTerminationCondition:
+        """Terminate when the budget is spent (the planner also stops at a solution)."""
+        return ob.PlannerTerminationCondition(self.exhausted)
