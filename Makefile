@@ -29,13 +29,16 @@ $(STAMP): pyproject.toml | $(BIN)/python
 run: $(RUN_STAMP)
 	$(BIN)/cramlite bench --traces --out results || [ $$? -eq 1 ]
 
+# The tests run on every core (pytest-xdist; at most 4 workers: each loads the robot).
+TEST_WORKERS ?= -n auto --maxprocesses 4
+
 test: $(STAMP)
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q $(TEST_WORKERS)
 
 test-quick: $(STAMP)
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -q -m "not slow"
+	$(BIN)/python -m pytest -q $(TEST_WORKERS) -m "not slow"
 
 package-check:
 	PYTHON=$(PYTHON) bash .ci/package-check

@@ -28,10 +28,22 @@ SLOW_MODULES = {"test_python313", "test_backends", "test_bench", "test_storage",
                 "test_docs_code"}
 
 
+#: The longest tests (a minute or more each on 2 cores), started first: with the tests
+#: spread over the cores (pytest-xdist), none of them is left to run alone at the end.
+LONGEST_FIRST = ("test_the_readme_tour_runs_as_written",
+                 "test_the_wheel_installs_on_python_313",
+                 "test_the_broadphase_misses_no_penetration",
+                 "test_dask_on_a_threaded_worker", "test_all_orders_and_random_setups",
+                 "test_two_simulators_agree_on_orders_success_and_where_items_settle",
+                 "test_dask_local_cluster_gives_the_same_rows",
+                 "test_kinematic_and_pybullet_backends_give_the_same_trials")
+
+
 def pytest_collection_modifyitems(config, items) -> None:
     for item in items:
         if item.module.__name__.rsplit(".", 1)[-1] in SLOW_MODULES:
             item.add_marker(pytest.mark.slow)
+    items.sort(key=lambda item: not item.name.startswith(LONGEST_FIRST))  # (stable)
 
 
 def skip_module_without_pybullet() -> None:
