@@ -111,6 +111,21 @@ class _Layout:
     pairs: np.ndarray  #: k x 2 moving parts checked against each other
     static_links: tuple[str, ...]  #: the robot links carrying obstacles
     kitchen: slice  #: where the kitchen's shapes are among the obstacles
+    #: Arrays of the obstacles (derived once per layout, for placing them per query):
+    #: each one's shape frame in its link's (O x 4 x 4) and the point `enclosed` tests
+    #: (O x 3, shape frame); the robot's and held items' obstacles with the row of the
+    #: static link carrying them; the items' obstacles with their item's index in
+    #: `item_names`; every obstacle that is not the kitchen's.
+    in_link: np.ndarray
+    refs: np.ndarray
+    robot_obstacles: np.ndarray
+    robot_links: np.ndarray
+    held_obstacles: np.ndarray
+    held_links: np.ndarray
+    item_obstacles: np.ndarray
+    item_index: np.ndarray
+    item_names: tuple[str, ...]
+    others: np.ndarray
 
 
 def _transform(matrix: np.ndarray) -> coal.Transform3s:
@@ -156,6 +171,7 @@ class SceneCollisions:
         self.request = coal.CollisionRequest()
         self._requests: dict[float, coal.CollisionRequest] = {}
         self._eroded: dict[tuple, coal.CollisionGeometry | None] = {}
+        self._part_frames: dict[tuple, tuple[_Layout, tuple]] = {}
 
     def enclosed(self, a: Shape, pa: np.ndarray, b: Shape, pb: np.ndarray) -> bool:
         """Does one shape lie wholly inside the other, a mesh (no surfaces cross)? Then a
@@ -311,8 +327,53 @@ class SceneCollisions:
                           if self_collision and self._may_meet(parts[i], parts[j])],
                          dtype=int).reshape(-1, 2)
         static = tuple(dict.fromkeys(o.frame_link for o in obstacles if o.frame_link))
+        in_link = np.array([o.shape.in_link for o in obstacles]).reshape(-1, 4, 4)
+        refs = np.array([_reference_point(o.shape) for o in obstacles]).reshape(-1, 3)
+        robot_ob = [k for k, o in enumerate(obstacles) if o.kind == "robot"]
+        held_ob = [k for k, o in enumerate(obstacles) if o.kind == "held"]
+        item_ob = [k for k, o in enumerate(obstacles) if o.kind == "item"]
+        item_names = tuple(dict.fromkeys(obstacles[k].owner for k in item_ob))
+        others = [k for k in range(len(obstacles)) if not (kitchen.start <= k < kitchen.stop)]
+        index = np.array  # (integer index arrays, possibly empty)
         return _Layout(tuple(parts), tuple(obstacles), links, rows, allowed, pairs, static,
-                       kitchen)
+                       kitchen, in_link, refs, index(robot_ob, dtype=int),
+                       index([static.index(obstacles[k].frame_link) for k in robot_ob],
+                             dtype=int),
+                       index(held_ob, dtype=int),
+                       index([static.index(obstacles[k].frame_link) for k in held_ob],
+                             dtype=int),
+                       index(item_ob, dtype=int),
+                       index([item_names.index(obstacles[k].owner) for k in item_ob],
+                             dtype=int),
+                       item_names, index(others, dtype=int))
+
+    def parts_in_frames(self, layout: _Layout, held: Sequence[HeldObject],
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                   np.ndarray, np.ndarray]:
+        """For a layout's parts held as `held`: each shape's placement in the frame of the
+        link carrying it, its bounds' centre there, half sizes, bounding radius, rotation
+        there, and the point `enclosed` tests (kept per layout and held poses)."""
+        relative = {h.name: h.relative for h in held}
+        key = (id(layout), tuple((h.name, np.asarray(h.relative).tobytes()) for h in held))
+        found = self._part_frames.get(key)
+        if found is not None and found[0] is layout:
+            return found[1]
+        parts = layout.parts
+        in_frame = np.array([relative[p.held] @ p.shape.in_link if p.held
+                             else p.shape.in_link for p in parts]).reshape(-1, 4, 4)
+        shapes = [p.shape for p in parts]
+        centres = np.array([sh.centre for sh in shapes]).reshape(-1, 3)
+        halves = np.array([sh.half for sh in shapes]).reshape(-1, 3)
+        radii = np.array([sh.radius for sh in shapes])
+        rotations = in_frame[:, :3, :3]
+        centres = (rotations @ centres[:, :, None])[:, :, 0] + in_frame[:, :3, 3]
+        refs = np.array([f[:3, :3] @ _reference_point(sh) + f[:3, 3]
+                         for f, sh in zip(in_frame, shapes, strict=True)]).reshape(-1, 3)
+        if len(self._part_frames) > 4096:
+            self._part_frames.clear()
+        value = (in_frame, centres, halves, radii, rotations, refs)
+        self._part_frames[key] = (layout, value)
+        return value
 
     def _may_touch(self, part: _Part, obstacle: _Obstacle, arms: dict[str, str],
                    ignore: frozenset[str]) -> bool:
@@ -381,21 +442,10 @@ class MotionCheck:
         self.obstacles = layout.obstacles
         self._rows = layout.rows
         self._allowed, self._pairs = layout.allowed, layout.pairs
-        relative = {h.name: h.relative for h in held}
-        self._in_frame = np.array([relative[p.held] @ p.shape.in_link if p.held
-                                   else p.shape.in_link for p in self.parts]).reshape(-1, 4, 4)
-        shapes = [p.shape for p in self.parts]
-        self._centres = np.array([s.centre for s in shapes]).reshape(-1, 3)
-        self._halves = np.array([s.half for s in shapes]).reshape(-1, 3)
-        self._radii = np.array([s.radius for s in shapes])
-        #: each part's sphere centre in its frame, and the shape's rotation in that frame
-        self._rotations = self._in_frame[:, :3, :3]
-        self._centres = (self._rotations @ self._centres[:, :, None])[:, :, 0] + \
-            self._in_frame[:, :3, 3]
-        #: each part's point that `enclosed` tests (in its frame): one inside the shape
-        self._refs = np.array([f[:3, :3] @ _reference_point(sh) + f[:3, 3]
-                               for f, sh in zip(self._in_frame, shapes, strict=True)]
-                              ).reshape(-1, 3)
+        #: each part's placement, bounds' centre, half sizes, radius and rotation in the
+        #: frame of the link carrying it, and its point that `enclosed` tests
+        (self._in_frame, self._centres, self._halves, self._radii, self._rotations,
+         self._refs) = owner.parts_in_frames(layout, held)
         self._static_frames = scene.link_matrices(layout.static_links, self.values, self.base) \
             if layout.static_links else {}
         #: upright held items that this motion moves: (frame row, the item's z axis in the
@@ -420,20 +470,21 @@ class MotionCheck:
         relative = {h.name: h.relative for h in self.held}
         kitchen_placed, kitchen_lo, kitchen_hi, kitchen_turned = \
             self.owner.kitchen_block(self._world_joints)
-        poses: dict[str, np.ndarray] = {}
-        for k, obstacle in enumerate(self.obstacles):
-            if obstacle.kind == "robot":
-                placements[k] = self._static_frames[obstacle.frame_link] @ obstacle.shape.in_link
-            elif obstacle.kind == "held":
-                placements[k] = (self._static_frames[obstacle.frame_link]
-                                 @ relative[obstacle.owner] @ obstacle.shape.in_link)
-            elif obstacle.kind == "item":
-                if obstacle.owner not in poses:
-                    poses[obstacle.owner] = self._item_matrix(obstacle.owner)
-                placements[k] = poses[obstacle.owner] @ obstacle.shape.in_link
+        if len(layout.static_links):
+            static = np.array([self._static_frames[link] for link in layout.static_links])
+            if len(layout.robot_obstacles):
+                placements[layout.robot_obstacles] = \
+                    static[layout.robot_links] @ layout.in_link[layout.robot_obstacles]
+            for k, row in zip(layout.held_obstacles.tolist(), layout.held_links.tolist(),
+                              strict=True):
+                placements[k] = static[row] @ relative[self.obstacles[k].owner] @ \
+                    layout.in_link[k]
+        if len(layout.item_obstacles):
+            poses = np.array([self._item_matrix(name) for name in layout.item_names])
+            placements[layout.item_obstacles] = \
+                poses[layout.item_index] @ layout.in_link[layout.item_obstacles]
         placements[layout.kitchen] = kitchen_placed
-        others = [k for k in range(len(self.obstacles)) if not
-                  (layout.kitchen.start <= k < layout.kitchen.stop)]
+        others = layout.others.tolist()
         lo, hi = np.empty((len(self.obstacles), 3)), np.empty((len(self.obstacles), 3))
         lo[layout.kitchen], hi[layout.kitchen] = kitchen_lo, kitchen_hi
         turned = {k + layout.kitchen.start: v for k, v in kitchen_turned.items()}
@@ -443,9 +494,10 @@ class MotionCheck:
             lo[others], hi[others] = o_lo, o_hi
             turned.update({others[k]: v for k, v in o_turned.items()})
         self._placements, self._lo, self._hi, self._turned = placements, lo, hi, turned
-        self._obstacle_refs = np.array([
-            placements[k, :3, :3] @ _reference_point(o.shape) + placements[k, :3, 3]
-            for k, o in enumerate(self.obstacles)]).reshape(-1, 3)
+        self._turned_mask = np.zeros(len(self.obstacles), dtype=bool)
+        self._turned_mask[list(turned)] = True
+        self._obstacle_refs = (placements[:, :3, :3] @ layout.refs[:, :, None])[:, :, 0] + \
+            placements[:, :3, 3]
         self._transforms: dict[int, coal.Transform3s] = {}
 
     def _item_matrix(self, name: str) -> np.ndarray:
@@ -492,21 +544,34 @@ class MotionCheck:
         refs = (rotations @ self._refs[None, :, :, None])[..., 0] + placed[..., :3, 3]
         near = np.zeros((s, len(self.parts), len(self.obstacles)), dtype=bool)
         if len(self.obstacles) and len(self.parts):
-            low = (centres - spans).reshape(-1, 3).min(axis=0)
-            high = (centres + spans).reshape(-1, 3).max(axis=0)
-            close = np.flatnonzero(np.all((self._lo <= high) & (self._hi >= low), axis=1))
-            if len(close):
-                c, h = centres[:, :, None, :], spans[:, :, None, :]
-                meet = np.all((self._lo[close] <= c + h) & (self._hi[close] >= c - h), axis=3)
-                near[:, :, close] = meet & self._allowed[None][:, :, close]
-                radii = self._radii + pad
-                for k, (centre, rotation, half) in self._turned.items():
-                    idx = np.nonzero(near[:, :, k])
-                    if not len(idx[0]):
-                        continue
-                    local = (centres[idx] - centre) @ rotation
-                    gap = np.maximum(np.abs(local) - half, 0.0)
-                    near[idx[0], idx[1], k] = (gap * gap).sum(axis=1) < radii[idx[1]] ** 2
+            # each part's bounds over all the states first: the obstacles each part can
+            # meet at all (few), then those pairs state by state
+            if s == 1:
+                low, high = centres[0] - spans[0], centres[0] + spans[0]
+            else:
+                low, high = (centres - spans).min(axis=0), (centres + spans).max(axis=0)
+            may = np.all((self._lo[None] <= high[:, None]) & (self._hi[None] >= low[:, None]),
+                         axis=2) & self._allowed
+            p, k = np.nonzero(may)
+            if len(p):
+                if s == 1:
+                    near[0, p, k] = True
+                else:
+                    c, h = centres[:, p], spans[:, p]
+                    near[:, p, k] = np.all((self._lo[k] <= c + h) & (self._hi[k] >= c - h),
+                                           axis=2)
+                if self._turned:
+                    radii = self._radii + pad
+                    for i in np.flatnonzero(self._turned_mask[k]).tolist():
+                        part, obstacle = int(p[i]), int(k[i])
+                        states = np.flatnonzero(near[:, part, obstacle])
+                        if not len(states):
+                            continue
+                        centre, rotation, half = self._turned[obstacle]
+                        local = (centres[states, part] - centre) @ rotation
+                        gap = np.maximum(np.abs(local) - half, 0.0)
+                        near[states, part, obstacle] = \
+                            (gap * gap).sum(axis=1) < radii[part] ** 2
         meets = np.zeros((s, len(self._pairs)), dtype=bool)
         if len(self._pairs):
             a, b = self._pairs[:, 0], self._pairs[:, 1]
