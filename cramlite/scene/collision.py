@@ -494,10 +494,12 @@ class MotionCheck:
             lo[others], hi[others] = o_lo, o_hi
             turned.update({others[k]: v for k, v in o_turned.items()})
         self._placements, self._lo, self._hi, self._turned = placements, lo, hi, turned
+        self._lo_list, self._hi_list = lo.tolist(), hi.tolist()
         self._turned_mask = np.zeros(len(self.obstacles), dtype=bool)
         self._turned_mask[list(turned)] = True
         self._obstacle_refs = (placements[:, :3, :3] @ layout.refs[:, :, None])[:, :, 0] + \
             placements[:, :3, 3]
+        self._obstacle_refs_list = self._obstacle_refs.tolist()
         self._transforms: dict[int, coal.Transform3s] = {}
 
     def _item_matrix(self, name: str) -> np.ndarray:
@@ -531,7 +533,7 @@ class MotionCheck:
         """Broadphase for S states: (S x parts x obstacles) parts whose boxes (their local
         bounds turned into the world, axis-aligned) meet obstacle boxes, and (S x pairs)
         moving parts whose boxes meet; and the boxes (S x P x 3 centres and half spans) and
-        the points `enclosed` tests (S x P x 3), for `_nested`.
+        the points `enclosed` tests (S x P x 3), for `_nested_test`.
         A turned obstacle box (an open door) is tested against the part's bounding
         sphere, not its axis-aligned bounds."""
         s = len(frames)
@@ -579,21 +581,29 @@ class MotionCheck:
                            axis=2)
         return near, meets, (centres, spans, refs)
 
-    def _nested(self, boxes: tuple[np.ndarray, np.ndarray, np.ndarray], near: np.ndarray,
-                meets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """For one state's meeting (part, obstacle) and (part, part) pairs: may one shape
-        lie wholly inside the other? Only if the point of it that `enclosed` tests lies in
-        the other's box."""
-        centres, spans, refs = boxes
-        p, k = np.nonzero(near)
-        ref = refs[p]
-        in_obstacle = np.all((self._lo[k] <= ref) & (ref <= self._hi[k]), axis=1)
-        in_part = np.all(np.abs(self._obstacle_refs[k] - centres[p]) <= spans[p], axis=1)
-        pairs = self._pairs[np.flatnonzero(meets)]
-        a, b = pairs[:, 0], pairs[:, 1]
-        nested_pairs = (np.all(np.abs(refs[a] - centres[b]) <= spans[b], axis=1)
-                        | np.all(np.abs(refs[b] - centres[a]) <= spans[a], axis=1))
-        return in_obstacle | in_part, nested_pairs
+    def _nested_test(self, boxes: tuple[np.ndarray, np.ndarray, np.ndarray],
+                     ) -> tuple[Callable[[int, int], bool], Callable[[int, int], bool]]:
+        """For one state's boxes (the parts' centres, half spans and the points `enclosed`
+        tests): may a part and an obstacle, or two parts, lie one wholly inside the other?
+        Only if the point of one that `enclosed` tests lies in the other's box. (Plain
+        floats: asked of a few pairs a state, where array operations cost more.)"""
+        centres, spans, refs = (b.tolist() for b in boxes)
+        lo, hi, obstacle_refs = self._lo_list, self._hi_list, self._obstacle_refs_list
+
+        def within(point: list[float], centre: list[float], span: list[float]) -> bool:
+            return (abs(point[0] - centre[0]) <= span[0] and abs(point[1] - centre[1]) <= span[1]
+                    and abs(point[2] - centre[2]) <= span[2])
+
+        def part_obstacle(p: int, k: int) -> bool:
+            ref, low, high = refs[p], lo[k], hi[k]
+            return ((low[0] <= ref[0] <= high[0] and low[1] <= ref[1] <= high[1]
+                     and low[2] <= ref[2] <= high[2])
+                    or within(obstacle_refs[k], centres[p], spans[p]))
+
+        def part_part(i: int, j: int) -> bool:
+            return within(refs[i], centres[j], spans[j]) or within(refs[j], centres[i], spans[i])
+
+        return part_obstacle, part_part
 
     def states_free(self, states: np.ndarray, order: Sequence[int] | None = None) -> bool:
         """Every state (rows of joint vectors) free: one broadphase for all of them, then
@@ -683,12 +693,12 @@ class MotionCheck:
     def _state_free(self, frames: np.ndarray, near: np.ndarray, meets: np.ndarray,
                     margin: float, boxes: tuple[np.ndarray, np.ndarray, np.ndarray]) -> bool:
         placed: dict[int, tuple[np.ndarray, coal.Transform3s]] = {}
-        nesting: list[tuple[np.ndarray, np.ndarray]] = []  # (worked out when first asked)
+        nesting: list = []  # (the test, made when first asked)
 
-        def nested(kind: int, index: int) -> bool:
+        def nested(kind: int, a: int, b: int) -> bool:
             if not nesting:
-                nesting.append(self._nested(boxes, near, meets))
-            return bool(nesting[0][kind][index])
+                nesting.extend(self._nested_test(boxes))
+            return nesting[kind](a, b)
 
         def part(i: int) -> tuple[np.ndarray, coal.Transform3s]:
             if i not in placed:
@@ -696,20 +706,19 @@ class MotionCheck:
                 placed[i] = (matrix, _transform(matrix))
             return placed[i]
 
-        for index, (p, k) in enumerate(np.argwhere(near).tolist()):
+        for p, k in np.argwhere(near).tolist():
             pa, ta = part(p)
             if self._collides(self.parts[p].shape, pa, ta, self.obstacles[k].shape,
                               self._placements[k], self._obstacle_transform(k),
                               self._allowance(self.obstacles[k], self.parts[p]), margin,
-                              lambda index=index: nested(0, index)):
+                              lambda p=p, k=k: nested(0, p, k)):
                 return False
-        for index, n in enumerate(np.flatnonzero(meets).tolist()):
-            i, j = self._pairs[n]
+        for i, j in self._pairs[np.flatnonzero(meets)].tolist():
             pa, ta = part(i)
             pb, tb = part(j)
             if self._collides(self.parts[i].shape, pa, ta, self.parts[j].shape, pb, tb,
                               self._allowance(None, self.parts[i], self.parts[j]), margin,
-                              lambda index=index: nested(1, index)):
+                              lambda i=i, j=j: nested(1, i, j)):
                 return False
         return True
 
