@@ -126,6 +126,10 @@ class _Layout:
     item_index: np.ndarray
     item_names: tuple[str, ...]
     others: np.ndarray
+    #: the local bounds' centres and half sizes of those others, and which are boxes
+    others_centres: np.ndarray
+    others_halves: np.ndarray
+    others_boxes: np.ndarray
 
 
 def _transform(matrix: np.ndarray) -> coal.Transform3s:
@@ -139,16 +143,22 @@ def _bounds(shapes: Sequence[Shape], placements: np.ndarray,
     and the boxes among them turned about an axis (index -> centre, rotation, half)."""
     if not len(shapes):
         return np.zeros((0, 3)), np.zeros((0, 3)), {}
-    centres = np.array([s.centre for s in shapes])
-    halves = np.array([s.half for s in shapes])
+    return _placed_bounds(np.array([s.centre for s in shapes]),
+                          np.array([s.half for s in shapes]),
+                          np.array([s.kind == BOX for s in shapes]), placements)
+
+
+def _placed_bounds(centres: np.ndarray, halves: np.ndarray, boxes: np.ndarray,
+                   placements: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict[int, tuple]]:
+    """`_bounds` of shapes given by their local bounds' centres and half sizes (N x 3) and
+    which of them are boxes."""
     rotations = placements[:, :3, :3]
     mid = (rotations @ centres[:, :, None])[:, :, 0] + placements[:, :3, 3]
     span = (np.abs(rotations) @ halves[:, :, None])[:, :, 0]
     turned = {}
     square = np.abs(rotations).max(axis=1).min(axis=1) >= 1 - 1e-6
-    for k in np.flatnonzero(~square):
-        if shapes[k].kind == "box":
-            turned[int(k)] = (mid[k], rotations[k], halves[k])
+    for k in np.flatnonzero(~square & boxes).tolist():
+        turned[k] = (mid[k], rotations[k], halves[k])
     return mid - span, mid + span, turned
 
 
@@ -345,7 +355,10 @@ class SceneCollisions:
                        index(item_ob, dtype=int),
                        index([item_names.index(obstacles[k].owner) for k in item_ob],
                              dtype=int),
-                       item_names, index(others, dtype=int))
+                       item_names, index(others, dtype=int),
+                       np.array([obstacles[k].shape.centre for k in others]).reshape(-1, 3),
+                       np.array([obstacles[k].shape.half for k in others]).reshape(-1, 3),
+                       np.array([obstacles[k].shape.kind == BOX for k in others], dtype=bool))
 
     def parts_in_frames(self, layout: _Layout, held: Sequence[HeldObject],
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
@@ -489,8 +502,8 @@ class MotionCheck:
         lo[layout.kitchen], hi[layout.kitchen] = kitchen_lo, kitchen_hi
         turned = {k + layout.kitchen.start: v for k, v in kitchen_turned.items()}
         if others:
-            o_lo, o_hi, o_turned = _bounds([self.obstacles[k].shape for k in others],
-                                           placements[others])
+            o_lo, o_hi, o_turned = _placed_bounds(layout.others_centres, layout.others_halves,
+                                                  layout.others_boxes, placements[others])
             lo[others], hi[others] = o_lo, o_hi
             turned.update({others[k]: v for k, v in o_turned.items()})
         self._placements, self._lo, self._hi, self._turned = placements, lo, hi, turned

@@ -141,6 +141,7 @@ class PlanningScene:
         #: the scene by the layers that need it.
         self.cache: dict[Any, Any] = {}
         self._kitchen_frames: dict[tuple, dict[str, np.ndarray]] = {}
+        self._item_matrices: dict[str, tuple[Any, np.ndarray]] = {}  # (by the pose)
 
     def _check_containers(self) -> None:
         src = str(containers_path(self.setup.world_urdf))
@@ -389,7 +390,12 @@ class PlanningScene:
         """An item's frame in the world (a held one where its gripper is)."""
         if name in self.belief.held:
             return self.held_matrix(name)
-        return pose_matrix(*self.belief.poses[name])
+        position, orientation = self.belief.poses[name]
+        key = (*map(float, position), *map(float, orientation))
+        found = self._item_matrices.get(name)
+        if found is None or found[0] != key:
+            found = self._item_matrices[name] = (key, pose_matrix(position, orientation))
+        return found[1].copy()
 
     def item_shapes(self, name: str, frame: np.ndarray | None = None,
                     ) -> list[tuple[Shape, np.ndarray]]:
