@@ -223,10 +223,14 @@ class CostmapLocation:
                     self.rejected["ik"] += 1
                     return None
                 continue
-            free = all(checks.free(solved[key], holding)
-                       for key, (_, holding) in poses.items())
-            if free and self.purpose == PLACE:  # and the gripper opens there
-                free = checks.free(solved["joints"], False)
+            # (the configurations with the same hand, as one batch each; placing, the
+            # gripper must open at the spot too)
+            empty = [solved[key] for key, (_, holding) in poses.items() if not holding]
+            full = [solved[key] for key, (_, holding) in poses.items() if holding]
+            if self.purpose == PLACE:
+                empty.append(solved["joints"])
+            free = all(checks.all_free(group, holding)
+                       for group, holding in ((empty, False), (full, True)) if group)
             if free:
                 break
             if last:
@@ -248,7 +252,8 @@ class CostmapLocation:
             arrive = carry_joints(ctx, arm, grasp.kind, grasp.height_m, torso) or pre
             legs = [(arrive, pre, True), (pre, at, True), (at, post, False),
                     (post, park, False)]
-        straight = all(checks.path_free(a, b, holding) for a, b, holding in legs)
+        straight = all(checks.paths_free([(a, b) for a, b, h in legs if h == holding], holding)
+                       for holding in (False, True))
         ctx.ik_seeds[(arm, grasp.kind, self.purpose)] = solved["joints"]
         return ReachablePose(base, arm, grasp, at, pre, post, relative, straight, tool_yaw,
                              item_yaw, tuple(float(v) for v in target.translation))
@@ -436,16 +441,31 @@ class ConfigurationChecks:
     def free(self, joints: dict[str, float], holding: bool) -> bool:
         return self._scene(holding).is_free(self._vector(joints))
 
+    def all_free(self, configurations: list[dict[str, float]], holding: bool) -> bool:
+        """Every one of these configurations free (checked as one batch)."""
+        return self._scene(holding).states_free(np.array([self._vector(j)
+                                                          for j in configurations]))
+
     def path_free(self, start: dict[str, float], goal: dict[str, float], holding: bool) -> bool:
         """Is the straight joint-space path between two checked configurations free?
         (Checked at every fourth step: it only ranks candidates, and the motion itself is
         checked at every step when it is executed; on v1-v5 and c1-c3 every fourth step
         ranks as every second did, the 16 trials' traces byte-identical, in less time.)"""
+        return self.paths_free([(start, goal)], holding)
+
+    def paths_free(self, paths: list[tuple[dict[str, float], dict[str, float]]],
+                   holding: bool) -> bool:
+        """`path_free` for every one of these (start, goal) pairs (checked as one batch)."""
+        if not paths:
+            return True
         limits = self.ctx.limits
-        a = self._vector(start)
-        b = limits.unwrap_goal(self.names, a, self._vector(goal))
-        dense, _ = densify(np.vstack([a, b]), 4 * limits.max_steps(self.names))
-        return self._scene(holding).states_free(dense[1:-1])
+        steps = 4 * limits.max_steps(self.names)
+        states = []
+        for start, goal in paths:
+            a = self._vector(start)
+            b = limits.unwrap_goal(self.names, a, self._vector(goal))
+            states.append(densify(np.vstack([a, b]), steps)[0][1:-1])
+        return self._scene(holding).states_free(np.vstack(states))
 
 
 def held(ctx: RobotContext) -> set[str]:
