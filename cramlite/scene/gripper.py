@@ -73,6 +73,10 @@ def gripper_geometry() -> GripperGeometry:
     gaps, pads, palms = [], [], []
     tool = prefix + "gripper_tool_frame"
     links = [prefix + name for name in HAND]
+    # each mesh's surface points in its own frame (the same at every angle)
+    samples = {id(shape): triangle_samples(shape.vertices[shape.triangles], 0.002)
+               for link in links for shape in robot.shapes_by_link.get(link, [])
+               if shape.vertices is not None}
     for angle in angles:
         frames = robot.link_placements(robot.with_mimics({leader: float(angle)}),
                                        [tool, *links])
@@ -84,8 +88,7 @@ def gripper_geometry() -> GripperGeometry:
                 if shape.vertices is None:
                     continue
                 placed = to_tool @ frames[link] @ shape.in_link
-                samples = triangle_samples(shape.vertices[shape.triangles], 0.002)
-                out.append(samples @ placed[:3, :3].T + placed[:3, 3])
+                out.append(samples[id(shape)] @ placed[:3, :3].T + placed[:3, 3])
             points[link] = np.vstack(out)
         left, right = points[prefix + TIPS[0]], points[prefix + TIPS[1]]
         gaps.append(float(left[:, 1].min() - right[:, 1].max()))

@@ -140,13 +140,19 @@ def _item_at(scene: PlanningScene, name: str, pose) -> Placed:
 def _deepest(collisions: SceneCollisions, a: Placed, b: Placed) -> float:
     """The deepest penetration between two sets of placed shapes (bounds first)."""
     deepest = 0.0
-    for sa, pa in a:
-        ca = shape_corners(sa, pa)
-        for sb, pb in b:
-            cb = shape_corners(sb, pb)
-            if np.any(ca.max(axis=0) < cb.min(axis=0)) or np.any(cb.max(axis=0) < ca.min(axis=0)):
-                continue
-            deepest = max(deepest, collisions.depth(sa, pa, sb, pb))
+    if not a or not b:
+        return deepest
+    # (each shape's corners, or a mesh's vertices, placed: their bounds)
+    corners_a = [shape_corners(sa, pa) for sa, pa in a]
+    corners_b = [shape_corners(sb, pb) for sb, pb in b]
+    lo_a = np.array([c.min(axis=0) for c in corners_a])
+    hi_a = np.array([c.max(axis=0) for c in corners_a])
+    lo_b = np.array([c.min(axis=0) for c in corners_b])
+    hi_b = np.array([c.max(axis=0) for c in corners_b])
+    apart = np.any((hi_a[:, None] < lo_b[None]) | (hi_b[None] < lo_a[:, None]), axis=2)
+    for i, j in np.argwhere(~apart).tolist():
+        (sa, pa), (sb, pb) = a[i], b[j]
+        deepest = max(deepest, collisions.depth(sa, pa, sb, pb))
     return deepest
 
 
