@@ -43,7 +43,7 @@ from cramlite.scene.geometry import (
 from cramlite.scene.kinematics import BatchedFrames
 from cramlite.scene.models import BOX, CYLINDER, MESH, Shape
 from cramlite.scene.scene import PlanningScene, tool_frame
-from cramlite.scene.transforms import planar
+from cramlite.scene.transforms import planar, planar_many
 
 #: Penetration allowed between the robot (or a held item) and the kitchen or an item at
 #: the states a motion is checked at: contacts (an item put down stands on its surface; a
@@ -640,7 +640,7 @@ class MotionCheck:
             local = self._link_frames(states)  # (in the base's frame)
         finally:
             self.base_matrix = saved
-        worlds = np.stack([planar(*pose) for pose in np.asarray(bases, dtype=float)])
+        worlds = planar_many(bases)
         return self._frames_free(worlds[:, None] @ local, None)
 
     def _frames_free(self, frames: np.ndarray, order: Sequence[int] | None) -> bool:

@@ -80,6 +80,20 @@ def planar(x: float, y: float, yaw: float) -> np.ndarray:
                      [0.0, 0.0, 0.0, 1.0]])
 
 
+def planar_many(poses: np.ndarray) -> np.ndarray:
+    """`planar` of each row (x, y, yaw) of `poses` (N x 4 x 4; the same numbers: the
+    sines and cosines are math's)."""
+    poses = np.asarray(poses, dtype=float).reshape(-1, 3)
+    yaws = poses[:, 2].tolist()
+    c = np.array([math.cos(a) for a in yaws])
+    s = np.array([math.sin(a) for a in yaws])
+    out = np.zeros((len(poses), 4, 4))
+    out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1] = c, -s, s, c
+    out[:, 0, 3], out[:, 1, 3] = poses[:, 0], poses[:, 1]
+    out[:, 2, 2] = out[:, 3, 3] = 1.0
+    return out
+
+
 def inverse(matrix: np.ndarray) -> np.ndarray:
     out = np.eye(4)
     rotation = matrix[:3, :3].T
