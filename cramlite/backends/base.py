@@ -61,14 +61,24 @@ class ProcessModules(ABC):
         """Move the trajectory's joints (arm, torso, gripper) through its states; a
         trajectory with `world` values moves a drawer or door with the hand."""
 
+    #: True where the states between a trajectory's first and last change nothing in the
+    #: executing world while nothing watches them (`on_state` is None): a simulation that
+    #: moves the robot kinematically goes straight to the last state then.
+    skips_unwatched_states: ClassVar[bool] = False
+
     def execute_parallel(self, base: BaseTrajectory, joints: JointTrajectory,
                          on_state: StateObserver = None) -> None:
         """Drive and move joints at once: `base` and `joints` share their times (state i of
         one belongs with state i of the other; the planner checked them together). This
-        default steps the two primitives state by state; a robot's driver should send
-        both at once instead."""
+        default steps the two primitives state by state (or, where nothing watches and
+        the states between change nothing, sends each whole: both end at their last
+        state); a robot's driver should send both at once instead."""
         import numpy as np
 
+        if on_state is None and self.skips_unwatched_states:
+            self.execute_base_trajectory(base)
+            self.execute_joint_trajectory(joints)
+            return
         for i in range(len(base.times)):
             t = base.times[i:i + 1]
             self.execute_base_trajectory(BaseTrajectory(np.asarray(base.poses)[i:i + 1], t))

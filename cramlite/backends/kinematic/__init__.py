@@ -30,6 +30,8 @@ class KinematicModules(ProcessModules):
         for item in list(self.state.held):
             self._let_go(item)
 
+    skips_unwatched_states = True
+
     def _states(self, count: int, on_state: StateObserver) -> range:
         """Every state while something watches; else the last one (nothing in a
         kinematic world acts on the states between)."""

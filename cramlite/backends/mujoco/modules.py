@@ -43,6 +43,8 @@ class MujocoModules(ProcessModules):
         for obj, (arm, _) in list(self._attached.items()):
             self.detach(arm, obj)
 
+    skips_unwatched_states = True
+
     def _states(self, count: int, on_state: StateObserver) -> range:
         """Every state while something watches (a trace), else the last (nothing in this
         world acts on the states between: physics runs only when settling)."""

@@ -44,6 +44,10 @@ class SimulatedProcessModules(ProcessModules):
         for obj, (arm, _, _) in list(self._attached.items()):
             self.detach(arm, obj)
 
+    @property
+    def skips_unwatched_states(self) -> bool:  # (the GUI shows every state)
+        return not self.world.gui
+
     def _states(self, count: int, on_state: StateObserver) -> range:
         """The states to put the world in: every one while something watches (a trace, the
         GUI), else the last (the robot moves kinematically and nothing in this world acts
