@@ -4,12 +4,14 @@
 food k 1.1-2.0, c 1.0-2.0), each simulated on the table-setting tasks (`cramlite
 simulate`: the recorded items, positions and start positions, orders drawn by a softmax
 over the OPM's costs at --temperature) with 3 seeds, then fitted by the grid search of
-`cramlite fit` (expected APE, xy). A parameter is recovered when the fit's best value is
-within one grid step (0.1) of the generating one. Where the best is a plateau (values
-that change no decision in these tasks fit exactly as well), the plateau is reported too.
+`cramlite fit` (xy): by default by the maximum likelihood of the choices under the
+softmax they were drawn with (`--metric likelihood`), or by the thesis's criterion
+(`--metric expected-ape`). A parameter is recovered when the fit's best value is within
+one grid step (0.1) of the generating one. Where the best is a plateau (values that change
+no decision in these tasks fit exactly as well), the plateau is reported too.
 
-    python benchmarks/bench_parameter_recovery.py [--episodes 372] [--temperature 0.05]
-        [--plot docs/images/parameter_recovery.png]
+    python benchmarks/bench_parameter_recovery.py [--episodes 744] [--temperature 0.2]
+        [--metric likelihood|expected-ape] [--plot docs/images/parameter_recovery.png]
 """
 
 from __future__ import annotations
@@ -22,8 +24,12 @@ import numpy as np
 
 from cramlite.evaluation.data import load_episodes
 from cramlite.evaluation.fit import PARAM_NAMES
-from cramlite.evaluation.options import DEFAULT_TEMPERATURE
-from cramlite.evaluation.recovery import recovery_study, recovery_table
+from cramlite.evaluation.recovery import (
+    EPISODES_PER_TASK,
+    RECOVERY_TEMPERATURE,
+    recovery_study,
+    recovery_table,
+)
 from cramlite.resources import resolve_data_path
 
 
@@ -32,16 +38,22 @@ def main() -> None:
     parser.add_argument("--like", default="table-setting")
     parser.add_argument("--sets", type=int, default=20)
     parser.add_argument("--seeds", type=int, default=3)
-    parser.add_argument("--episodes", type=int, default=372)
-    parser.add_argument("--temperature", type=float, default=DEFAULT_TEMPERATURE)
+    parser.add_argument("--episodes", type=int, default=None,
+                        help=f"default {EPISODES_PER_TASK} per recorded episode")
+    parser.add_argument("--temperature", type=float, default=RECOVERY_TEMPERATURE)
+    parser.add_argument("--metric", default="likelihood",
+                        choices=("likelihood", "expected-ape", "ape"))
     parser.add_argument("--plot", help="write the recovery plot here (PNG)")
     args = parser.parse_args()
     like, _ = load_episodes(resolve_data_path(args.like))
     started = time.perf_counter()
-    runs = recovery_study(like, args.sets, args.seeds, args.episodes, args.temperature)
+    episodes = args.episodes or EPISODES_PER_TASK * len(like)
+    runs = recovery_study(like, args.sets, args.seeds, episodes, args.temperature,
+                          metric=args.metric)
     seconds = time.perf_counter() - started
-    print(f"{args.sets} parameter sets x {args.seeds} seeds, {args.episodes} episodes like "
-          f"{args.like}, temperature {args.temperature}: {seconds:.1f} s")
+    print(f"{args.sets} parameter sets x {args.seeds} seeds, {episodes} episodes like "
+          f"{args.like}, temperature {args.temperature}, fitted by {args.metric}: "
+          f"{seconds:.1f} s")
     print("| parameter | recovered within 0.1 | on a plateau that holds it | mean plateau width |")
     print("|---|---|---|---|")
     for row in recovery_table(runs):
@@ -52,11 +64,11 @@ def main() -> None:
     print(f"every parameter recovered: {100 * every:.0f} % of fits; strong k, mid k and c: "
           f"{100 * kc:.0f} %")
     if args.plot:
-        plot(runs, args.plot, args.temperature, args.episodes)
+        plot(runs, args.plot, args.temperature, episodes, args.metric)
         print(f"wrote {args.plot}")
 
 
-def plot(rows, path: str, temperature: float, episodes: int) -> None:
+def plot(rows, path: str, temperature: float, episodes: int, metric: str) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -80,8 +92,9 @@ def plot(rows, path: str, temperature: float, episodes: int) -> None:
         ax.set_xlabel("generating value")
     axes[0].set_ylabel("recovered value")
     axes[0].legend(fontsize=7, loc="upper left")
+    fitted = "maximum likelihood" if metric == "likelihood" else metric
     fig.suptitle(f"Parameter recovery: OPM on the table-setting tasks, {episodes} episodes, "
-                 f"softmax temperature {temperature}", fontsize=10)
+                 f"softmax temperature {temperature}, fitted by {fitted}", fontsize=10)
     fig.tight_layout()
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110, bbox_inches="tight")

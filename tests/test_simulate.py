@@ -3,12 +3,18 @@ recorded ones do, follow the generating parameters, and `fit` recovers them."""
 
 from __future__ import annotations
 
-import numpy as np
+import json
+import math
+from pathlib import Path
 
-from cramlite.evaluation.data import load_episodes, parse_row
+import numpy as np
+import pytest
+
+from cramlite.evaluation.data import Episode, load_episodes, parse_row
 from cramlite.evaluation.fit import PARAM_NAMES, FitResult, fit
 from cramlite.evaluation.simulate import episode_row, simulate, softmax_choice
 from cramlite.resources import resolve_data_path
+from cramlite.strategies import Candidate
 from tests.conftest import run_cli
 
 GENERATING = {"strong_k": 0.6, "mid_k": 0.7, "food_k": 1.2, "c": 1.4}
@@ -94,3 +100,63 @@ def test_simulate_refuses_bad_input_in_one_line(tmp_path) -> None:
         lines = result.stderr.strip().splitlines()
         assert result.returncode == 2 and len(lines) == 1, result.stderr
         assert expected in lines[0], lines[0]
+
+
+def test_the_likelihood_of_a_hand_made_step_is_the_softmax_of_its_costs() -> None:
+    # from the origin, the cup 1 m away, the bowl 2 m (k = c = 1: the costs are the
+    # distances); the subject takes the bowl first, then the cup (a step that offers
+    # one item is not scored)
+    from cramlite.evaluation.evaluate import baseline_score
+    from cramlite.evaluation.fit import grid_nll
+
+    seq = ("bowl", "cup")
+    items = (Candidate("bowl", (2.0, 0.0, 0.0)), Candidate("cup", (1.0, 0.0, 0.0)))
+    episode = Episode(id="t", activity="test", sequence=seq, items=items, taken=(0, 1),
+                      start_positions=((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)), cells={})
+    configs = np.array([(1.0, 1.0, 1.0, 1.0)])
+    for temperature in (0.5, 1.0, 2.0):
+        nll = grid_nll(episode, configs, "xy", "power", temperature=temperature)
+        # P(bowl) = exp(-2/T) / (exp(-1/T) + exp(-2/T))
+        expected = -math.log(math.exp(-2 / temperature)
+                             / (math.exp(-1 / temperature) + math.exp(-2 / temperature)))
+        assert nll[:, 0] == pytest.approx([expected])
+    # uniform guessing: log 2
+    assert baseline_score(episode, "likelihood")[0] == pytest.approx(math.log(2))
+    with pytest.raises(ValueError, match="temperature > 0"):
+        grid_nll(episode, configs, "xy", "power", temperature=0.0)
+
+
+def test_the_likelihood_fit_recovers_what_the_apes_plateau_cannot_tell_apart() -> None:
+    """Food k changes few of the model's choices on the table-setting tasks: the expected
+    APE fits a plateau of food k values equally well; the likelihood of the choices (how
+    much likelier each was than the others) picks the generating value."""
+    truth = {"strong_k": 0.4, "mid_k": 0.5, "food_k": 1.5, "c": 1.3}
+    drawn = simulate(table_setting(), 744, params=truth, temperature=0.2, seed=0)
+    episodes = [parse_row(episode_row(e)) for e in drawn]
+    configs = np.array([(0.4, 0.5, food, c) for food in (1.1, 1.3, 1.5, 1.7, 1.9)
+                        for c in (1.1, 1.3, 1.5)])
+    by_ape = fit(episodes, "opm", ("xy",), "expected-ape", configs=configs)
+    by_likelihood = fit(episodes, "opm", ("xy",), "likelihood", configs=configs,
+                        temperature=0.2)
+    lo, hi = by_ape.tied_best("xy")["food_k"]
+    assert hi - lo >= 0.4 - 1e-9  # (the APE cannot tell them apart)
+    best = by_likelihood.params(by_likelihood.best("xy")[1])
+    assert best["food_k"] == 1.5 and best["c"] == 1.3, best
+    assert by_likelihood.tied_best("xy")["food_k"] == (1.5, 1.5)
+
+
+def test_fit_likelihood_from_the_command_line(tmp_path: Path) -> None:
+    sim = tmp_path / "sim.csv"
+    assert run_cli("simulate", "--params", "strong_k=0.4,mid_k=0.5,food_k=1.5,c=1.3",
+                   "--episodes", "40", "--temperature", "0.2", "--out", str(sim)).returncode == 0
+    done = run_cli("fit", str(sim), "--metric", "likelihood", "--temperature", "0.2",
+                   "--dims", "xy", "--out", str(tmp_path / "fit"), "--json")
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout)
+    assert summary["metric"] == "likelihood" and summary["random_baseline_mean"] > 0
+    for args, message in (
+            (["--temperature", "0"], "--temperature: expected a temperature > 0"),
+            (["--strategy", "random"], "likelihood metric needs a strategy with a cost")):
+        bad = run_cli("fit", str(sim), "--metric", "likelihood", *args, "--out",
+                      str(tmp_path / "bad"))
+        assert bad.returncode == 2 and message in bad.stderr and "Traceback" not in bad.stderr

@@ -13,6 +13,7 @@ from pathlib import Path
 from cramlite.cli.common import (
     EXIT_OK,
     episodes_int,
+    float_in_range,
     parse_params,
     progress_bar,
     repeats_int,
@@ -23,7 +24,13 @@ from cramlite.cli.common import (
     writable_folder,
 )
 from cramlite.errors import UserInputError
-from cramlite.evaluation.options import DEFAULT_TEMPERATURE, DIM_NAMES, METRICS, PROTOCOLS
+from cramlite.evaluation.options import (
+    DEFAULT_TEMPERATURE,
+    DIM_NAMES,
+    FIT_METRICS,
+    METRICS,
+    PROTOCOLS,
+)
 from cramlite.strategies.base import StrategyError
 
 
@@ -135,7 +142,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
         with progress_bar(len(episodes) * len(dims), f"fit {args.strategy}") as bar:
             result = fit(episodes, args.strategy, dims, args.metric, args.repeats, args.seed,
                          args.form, configs, progress=bar.update, protocol=args.protocol,
-                         workers=args.workers)
+                         workers=args.workers, temperature=args.temperature)
     except StrategyError as exc:  # a plugin that raises or returns a non-candidate
         raise UserInputError(str(exc), field="--strategy") from None
     except ValueError as exc:
@@ -215,6 +222,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+#: A likelihood's softmax temperature: > 0 (0 would make every other choice impossible).
+temperature_float = float_in_range(0.0, 1e6, "a temperature > 0 and <= 1e6", open_minimum=True)
+
+
 def _add_data_arguments(p: argparse.ArgumentParser, metrics: tuple[str, ...]) -> None:
     p.add_argument("data", help="CSV of recorded sequences (the published OPM format), or "
                                 "a shipped set by name: table-setting (186 episodes), "
@@ -222,7 +233,11 @@ def _add_data_arguments(p: argparse.ArgumentParser, metrics: tuple[str, ...]) ->
     p.add_argument("--strategy", default="opm", help="strategy name (see `cramlite strategies`)")
     p.add_argument("--metric", default="ape", choices=metrics,
                    help="ape: sampled APE (median over repeats); expected-ape: its exact "
-                        "expectation; edit / edit-unrestricted: normalised Damerau-Levenshtein")
+                        "expectation; edit / edit-unrestricted: normalised Damerau-Levenshtein"
+                        + ("; likelihood: the negative log-likelihood of the observed "
+                           "choices under a softmax over the costs at --temperature (its "
+                           "minimum: the maximum-likelihood fit; opm, nearest, opm-2step, "
+                           "optimal)" if "likelihood" in metrics else ""))
     p.add_argument("--form", default="power", choices=("power", "additive", "product"),
                    help="functional form (Eq. 3.1-3.3)")
     add_protocol_argument(p)
@@ -253,7 +268,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     evaluate.set_defaults(func=cmd_evaluate)
 
     fit_cmd = sub.add_parser("fit", help="grid-search a strategy's parameters (Table 3.4)")
-    _add_data_arguments(fit_cmd, METRICS)
+    _add_data_arguments(fit_cmd, FIT_METRICS)
+    fit_cmd.add_argument("--temperature", type=temperature_float, default=DEFAULT_TEMPERATURE,
+                         help="with --metric likelihood: the choice rule's softmax "
+                              "temperature, P(item) ~ exp(-cost / T) (default "
+                              f"{DEFAULT_TEMPERATURE}, as `simulate` draws)")
     fit_cmd.add_argument("--dims", default="xy,xyz",
                          help="comma-separated projections to fit (default xy,xyz)")
     fit_cmd.add_argument("--independent-mid", action="store_true",

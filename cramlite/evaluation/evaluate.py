@@ -14,6 +14,7 @@ from cramlite.evaluation.metrics import (
     expected_ape,
     random_ape,
     random_edit,
+    random_nll,
     random_order_edit,
     sampled_ape,
     sampled_edit,
@@ -93,9 +94,14 @@ def baseline_score(episode: Episode, metric: str, rng: np.random.Generator | Non
     """The published random baseline of an episode under a metric, and whether it is
     exact: APE of uniform guessing; for edit the data's `error` convention (restricted
     distance over n distinct symbols; unrestricted for `edit-unrestricted` except under
-    the reference protocol, whose baseline column is the restricted one)."""
+    the reference protocol, whose baseline column is the restricted one); for the
+    likelihood, the negative log-likelihood of uniform guessing."""
     if metric in ("ape", "expected-ape"):
         return random_ape(episode, protocol), True
+    if metric == "likelihood":
+        return random_nll(episode, protocol), True
+    if metric == "likelihood":
+        return random_nll(episode, protocol), True
     return random_edit(episode, restricted=metric == "edit" or is_reference(protocol))
 
 

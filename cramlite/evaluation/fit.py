@@ -12,7 +12,8 @@ uses). Other strategies and metrics are scored point by point, over worker proce
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable, Sequence
+import math
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,6 +22,7 @@ import numpy as np
 from cramlite.evaluation.data import Episode
 from cramlite.evaluation.evaluate import episode_rng, score_episode, strategy_factory
 from cramlite.evaluation.metrics import ape_uniforms, sampled_errors
+from cramlite.evaluation.options import DEFAULT_TEMPERATURE
 from cramlite.evaluation.protocol import ape_steps
 from cramlite.strategies.base import StrategyCrashed, StrategyError
 from cramlite.strategies.cost import DIMS
@@ -98,7 +100,7 @@ VECTORISED = {OPMStrategy: "opm", NearestStrategy: "nearest", OPMTwoStepStrategy
 
 def _vector_kind(name: str, metric: str) -> str | None:
     cls = strategy_class(name)
-    return VECTORISED.get(cls) if metric in ("ape", "expected-ape") else None
+    return VECTORISED.get(cls) if metric in ("ape", "expected-ape", "likelihood") else None
 
 
 def _cost(d: np.ndarray, k: np.ndarray, c: np.ndarray, form: str) -> np.ndarray:
@@ -109,16 +111,14 @@ def _cost(d: np.ndarray, k: np.ndarray, c: np.ndarray, form: str) -> np.ndarray:
     return d * k * c
 
 
-def grid_probabilities(episode: Episode, configs: np.ndarray, dims: str, form: str,
-                       kind: str = "opm", protocol: str = "heldout") -> np.ndarray:
-    """P(correct) per scored step and grid point, (steps, G), for the teacher-forced
-    steps of `opm`, `nearest`, `opm-2step` (the second of a pair is seen from where the
-    observed first item was taken) and `optimal` (the first item of a least-cost order
-    when every trip starts from one point: argmin C(agent, j) - C(T, j))."""
+def _grid_costs(episode: Episode, configs: np.ndarray, dims: str, form: str,
+                kind: str, protocol: str) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """For each teacher-forced step: the cost of every offered item at every grid point
+    (G x items; for `optimal` relative to the trip's end) and which items are the observed
+    one (items,)."""
     axes = list(DIMS[dims])
     steps = ape_steps(episode, protocol)
     g = len(configs)
-    out = np.empty((len(steps), g))
     for i, step in enumerate(steps):
         items = step.candidates
         positions = np.array([c.position for c in items], dtype=float)[:, axes]
@@ -144,21 +144,54 @@ def grid_probabilities(episode: Episode, configs: np.ndarray, dims: str, form: s
             if len(afters) != 1:
                 raise ValueError("the vectorised optimal fit needs one after-position per step")
             cost = cost - costs(afters.pop())
+        yield cost, np.array([it.name == step.observed_name for it in items])
+
+
+def grid_probabilities(episode: Episode, configs: np.ndarray, dims: str, form: str,
+                       kind: str = "opm", protocol: str = "heldout") -> np.ndarray:
+    """P(correct) per scored step and grid point, (steps, G), for the teacher-forced
+    steps of `opm`, `nearest`, `opm-2step` (the second of a pair is seen from where the
+    observed first item was taken) and `optimal` (the first item of a least-cost order
+    when every trip starts from one point: argmin C(agent, j) - C(T, j))."""
+    rows = []
+    for cost, observed in _grid_costs(episode, configs, dims, form, kind, protocol):
+        if kind == "optimal":
             best = cost.min(axis=1, keepdims=True)
             tied = cost <= best + TIE_RTOL * np.maximum(np.abs(best), 1.0)
         else:
             tied = cost == cost.min(axis=1, keepdims=True)
-        hits = tied[:, [it.name == step.observed_name for it in items]].sum(axis=1)
-        out[i] = hits / tied.sum(axis=1)
-    return out
+        rows.append(tied[:, observed].sum(axis=1) / tied.sum(axis=1))
+    return np.array(rows).reshape(-1, len(configs))
+
+
+def grid_nll(episode: Episode, configs: np.ndarray, dims: str, form: str,
+             kind: str = "opm", protocol: str = "heldout",
+             temperature: float = DEFAULT_TEMPERATURE) -> np.ndarray:
+    """Negative log-likelihood (nats) of each teacher-forced step's observed choice at
+    every grid point, (steps, G), under the softmax choice rule `simulate` draws with:
+    P(item) proportional to exp(-cost / temperature) (an item named twice: either)."""
+    if not math.isfinite(temperature) or temperature <= 0:
+        raise ValueError(f"the likelihood needs a temperature > 0, got {temperature}")
+    rows = []
+    for cost, observed in _grid_costs(episode, configs, dims, form, kind, protocol):
+        z = -(cost - cost.min(axis=1, keepdims=True)) / temperature  # (the best: 0)
+        rows.append(np.log(np.exp(z).sum(axis=1)) - np.log(np.exp(z[:, observed]).sum(axis=1)))
+    return np.array(rows).reshape(-1, len(configs))
 
 
 def _vector_scores(episodes: Sequence[Episode], configs: np.ndarray, dims: str, form: str,
                    kind: str, metric: str, repeats: int, seed: int, protocol: str,
-                   progress: Callable[[float], None] | None) -> np.ndarray:
+                   progress: Callable[[float], None] | None,
+                   temperature: float = DEFAULT_TEMPERATURE) -> np.ndarray:
     table = np.zeros((len(episodes), len(configs)))
     for e, episode in enumerate(episodes):
         if len(episode) >= 2:
+            if metric == "likelihood":
+                table[e] = grid_nll(episode, configs, dims, form, kind, protocol,
+                                    temperature).sum(axis=0)
+                if progress:
+                    progress(1)
+                continue
             probs = grid_probabilities(episode, configs, dims, form, kind, protocol)
             if metric == "expected-ape":
                 table[e] = (1.0 - probs).sum(axis=0)
@@ -217,24 +250,30 @@ def fit(episodes: Sequence[Episode], strategy: str = "opm", dims: Sequence[str] 
         metric: str = "ape", repeats: int = 100, seed: int = 0, form: str = "power",
         configs: np.ndarray | None = None,
         progress: Callable[[float], None] | None = None, protocol: str = "heldout",
-        workers: int = 1) -> FitResult:
+        workers: int = 1, temperature: float = DEFAULT_TEMPERATURE) -> FitResult:
     """Score every grid point for each projection; scores are per episode.
 
     `opm`, `nearest`, `opm-2step` and `optimal` under the APE metrics are scored for the
     whole grid at once (per step, one configs x items array); other strategies and
     metrics point by point, over `workers` processes. Either way the numbers are those
     `evaluate` gives for the same seed. `progress` receives episodes done per projection.
+    `likelihood` (those four strategies only): each episode's negative log-likelihood of
+    the observed choices under a softmax over the costs at `temperature`; its minimum is
+    the maximum-likelihood fit (the rule `simulate` draws with).
     """
     configs = source_grid() if configs is None else configs
     cls = strategy_class(strategy)
     if cls is NearestStrategy or not getattr(cls, "uses_params", True):
         configs = configs[:1]
     kind = _vector_kind(strategy, metric)
+    if metric == "likelihood" and kind is None:
+        raise ValueError(f"the likelihood metric needs a strategy with a cost per item "
+                         f"(opm, nearest, opm-2step, optimal), got {strategy!r}")
     scores: dict[str, np.ndarray] = {}
     for dim in dims:
         if kind is not None:
             scores[dim] = _vector_scores(episodes, configs, dim, form, kind, metric, repeats,
-                                         seed, protocol, progress)
+                                         seed, protocol, progress, temperature)
         else:
             scores[dim] = _pointwise_scores(episodes, strategy, configs, dim, form, metric,
                                             repeats, seed, protocol, workers, progress)

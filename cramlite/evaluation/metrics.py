@@ -164,6 +164,14 @@ def random_ape(episode: Episode, protocol: str = "heldout") -> float:
                      / len(step.candidates) for step in ape_steps(episode, protocol)))
 
 
+def random_nll(episode: Episode, protocol: str = "heldout") -> float:
+    """Negative log-likelihood of the observed choices under uniformly random guessing
+    among the offered items (nats)."""
+    return float(sum(math.log(len(step.candidates))
+                     - math.log(sum(c.name == step.observed_name for c in step.candidates))
+                     for step in ape_steps(episode, protocol)))
+
+
 def random_order_edit(episode: Episode, restricted: bool = True, protocol: str = "heldout",
                       ) -> tuple[float, bool]:
     """Expected edit score of the `random` strategy: a uniformly random order of the

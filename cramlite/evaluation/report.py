@@ -74,7 +74,8 @@ def plot_by_projection(result: FitResult, baselines: list[float], path: Path) ->
         ax.axhline(float(np.mean(baselines)), color="grey", linestyle="--",
                    label=f"random baseline (mean {np.mean(baselines):.2f})")
         ax.legend(loc="upper right")
-    ax.set_ylabel(f"{result.metric} per episode")
+    ax.set_ylabel("negative log-likelihood per episode (nats)" if result.metric == "likelihood"
+                  else f"{result.metric} per episode")
     ax.set_title(f"{result.strategy}: error by projection (best parameters of each)")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
