@@ -78,13 +78,14 @@ def test_the_wheel_installs_on_python_313_with_mujoco_without_pybullet_and_runs(
     opm = json.loads(_run([cramlite, "run", "v1", "--strategy", "opm", "--json"],
                           cwd=tmp_path).stdout)
     assert " ".join(opm["order"]) == "bowl breakfast-cereal cup spoon milk"  # Table 4.3
-    for setup in ("v1", "c1"):
-        checked = _run([cramlite, "replay", f"{setup}.jsonl", "--check"], cwd=tmp_path)
-        assert "nothing penetrating" in checked.stdout, checked.stdout
-    drawn = _run([cramlite, "replay", "c1.jsonl", "--out", "c1.gif", "--speed", "40"],
+    # (the check and the picture of the shorter trace: c1's 4 300 states are checked on
+    # 3.11 by test_storage, and here would cost half a minute more)
+    checked = _run([cramlite, "replay", "v1.jsonl", "--check"], cwd=tmp_path)
+    assert "nothing penetrating" in checked.stdout, checked.stdout
+    drawn = _run([cramlite, "replay", "v1.jsonl", "--out", "v1.gif", "--speed", "40"],
                  cwd=tmp_path)
     assert "drawn as the mujoco backend draws" in drawn.stdout, drawn.stdout
-    assert (tmp_path / "c1.gif").stat().st_size > 10_000
+    assert (tmp_path / "v1.gif").stat().st_size > 10_000
     _run([cramlite, "bench", "--trials", "1", "--out", "results"], cwd=tmp_path)
     rows = (tmp_path / "results" / "trials.csv").read_text().splitlines()
     assert len(rows) == 11  # header + v1..v5 x opm, baseline

@@ -23,12 +23,17 @@ def _row(markdown: str, *starts: str) -> list[str]:
 
 
 def test_reproduce_rebuilds_every_table_on_a_tiny_subset(tmp_path) -> None:
-    result = run_cli("reproduce", "--out", str(tmp_path), "--episodes", "10", "--setups",
-                     "v1", "--epochs", "2", "--recovery-sets", "2", "--recovery-seeds", "1",
-                     "--repeats", "5", timeout=600)
+    """The README tour's `reproduce` as printed (run in an empty folder), on a tiny
+    subset."""
+    from tests.test_docs_code import README_REPRODUCE
+
+    result = run_cli(*README_REPRODUCE[1:], "--episodes", "10", "--setups", "v1",
+                     "--epochs", "2", "--recovery-sets", "2", "--recovery-seeds", "1",
+                     "--repeats", "5", cwd=tmp_path, timeout=600)
     assert result.returncode == 0, result.stderr
-    page = (tmp_path / "reproduce.md").read_text()
-    assert (tmp_path / "reproduce.html").read_text().count("<table>") == 5
+    out = tmp_path / README_REPRODUCE[README_REPRODUCE.index("--out") + 1]
+    page = (out / "reproduce.md").read_text()
+    assert (out / "reproduce.html").read_text().count("<table>") == 5
     for title in ("Table 3.4", "Tables 4.2-4.4", "Table 3.8", "Ablation", "Parameter recovery"):
         assert title in page
     # the robot's orders are Tables 4.2 and 4.3 (run here, not copied)
