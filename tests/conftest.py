@@ -25,7 +25,7 @@ SLOW_MODULES = {"test_python313", "test_backends", "test_bench", "test_storage",
                 "test_report", "test_learning", "test_user_plans", "test_results_files",
                 "test_packaging", "test_planning_scene", "test_motion_safety",
                 "test_manipulation", "test_physics_check", "test_dask", "test_process_cache",
-                "test_docs_code"}
+                "test_docs_code", "test_reproduce"}
 
 
 #: The longest tests (a minute or more each on 2 cores), started first: with the tests
