@@ -252,18 +252,21 @@ class ArmIK:
             v = self._step(jac, err, q, preferred_torso_m)
             # a joint at its limit that the step pushes further out is held there, and
             # the step is taken again without it (else the descent crawls along the limit)
+            # (plain floats: comparing numpy scalars one by one costs more than the list)
+            qs, vs = q.tolist(), v.tolist()
             held = [iv for iq, iv, lo, hi in self._bounded_v
-                    if (q[iq] <= lo and v[iv] < 0) or (q[iq] >= hi and v[iv] > 0)]
+                    if (qs[iq] <= lo and vs[iv] < 0) or (qs[iq] >= hi and vs[iv] > 0)]
             if held:
                 jac[:, held] = 0.0
                 torso_held = self._torso is not None and self._torso[1] in held
                 v = self._step(jac, err, q, None if torso_held else preferred_torso_m)
                 v[held] = 0.0
             q = pin.integrate(model, q, v)
+            qs = q.tolist()
             for i, lo, hi in self._bounded:
-                if q[i] < lo:
+                if qs[i] < lo:
                     q[i] = lo
-                elif q[i] > hi:
+                elif qs[i] > hi:
                     q[i] = hi
         return None
 
