@@ -120,6 +120,9 @@ def test_the_likelihood_of_a_hand_made_step_is_the_softmax_of_its_costs() -> Non
         expected = -math.log(math.exp(-2 / temperature)
                              / (math.exp(-1 / temperature) + math.exp(-2 / temperature)))
         assert nll[:, 0] == pytest.approx([expected])
+    # a choice far costlier than the best is unlikely, not impossible: its cost over T
+    assert grid_nll(episode, configs, "xy", "power", temperature=1e-6)[0, 0] == \
+        pytest.approx(1e6)
     # uniform guessing: log 2
     assert baseline_score(episode, "likelihood")[0] == pytest.approx(math.log(2))
     with pytest.raises(ValueError, match="temperature > 0"):

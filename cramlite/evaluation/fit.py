@@ -175,8 +175,15 @@ def grid_nll(episode: Episode, configs: np.ndarray, dims: str, form: str,
     rows = []
     for cost, observed in _grid_costs(episode, configs, dims, form, kind, protocol):
         z = -(cost - cost.min(axis=1, keepdims=True)) / temperature  # (the best: 0)
-        rows.append(np.log(np.exp(z).sum(axis=1)) - np.log(np.exp(z[:, observed]).sum(axis=1)))
+        rows.append(_log_sum_exp(z) - _log_sum_exp(z[:, observed]))
     return np.array(rows).reshape(-1, len(configs))
+
+
+def _log_sum_exp(z: np.ndarray) -> np.ndarray:
+    """log(sum(exp(z))) along each row, without underflow (a choice far costlier than the
+    best has a tiny, not a zero, probability)."""
+    top = z.max(axis=1, keepdims=True)
+    return top[:, 0] + np.log(np.exp(z - top).sum(axis=1))
 
 
 def _vector_scores(episodes: Sequence[Episode], configs: np.ndarray, dims: str, form: str,
