@@ -125,8 +125,9 @@ def test_the_likelihood_of_a_hand_made_step_is_the_softmax_of_its_costs() -> Non
         pytest.approx(1e6)
     # uniform guessing: log 2
     assert baseline_score(episode, "likelihood")[0] == pytest.approx(math.log(2))
-    with pytest.raises(ValueError, match="temperature > 0"):
-        grid_nll(episode, configs, "xy", "power", temperature=0.0)
+    for cold in (0.0, 5e-324):
+        with pytest.raises(ValueError, match="temperature >= 1e-06"):
+            grid_nll(episode, configs, "xy", "power", temperature=cold)
 
 
 def test_the_likelihood_fit_recovers_what_the_apes_plateau_cannot_tell_apart() -> None:
@@ -158,8 +159,12 @@ def test_fit_likelihood_from_the_command_line(tmp_path: Path) -> None:
     summary = json.loads(done.stdout)
     assert summary["metric"] == "likelihood" and summary["random_baseline_mean"] > 0
     for args, message in (
-            (["--temperature", "0"], "--temperature: expected a temperature > 0"),
+            (["--temperature", "0"], "--temperature: expected a temperature from 1e-06"),
+            (["--temperature", "5e-324"], "--temperature: expected a temperature from 1e-06"),
+            (["--metric", "ape", "--temperature", "0.2"],
+             "--temperature: applies to --metric likelihood only"),
             (["--strategy", "random"], "likelihood metric needs a strategy with a cost")):
-        bad = run_cli("fit", str(sim), "--metric", "likelihood", *args, "--out",
-                      str(tmp_path / "bad"))
+        if "--metric" not in args:
+            args = ["--metric", "likelihood", *args]
+        bad = run_cli("fit", str(sim), *args, "--out", str(tmp_path / "bad"))
         assert bad.returncode == 2 and message in bad.stderr and "Traceback" not in bad.stderr

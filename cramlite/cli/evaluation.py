@@ -135,6 +135,10 @@ def cmd_fit(args: argparse.Namespace) -> int:
             raise UserInputError(f"unknown projection {d!r}; expected a comma-separated list "
                                  f"of {', '.join(DIM_NAMES)}", field="--dims")
     strategy_checked(args.strategy, form=args.form)
+    if args.temperature is not None and args.metric != "likelihood":
+        raise UserInputError(f"applies to --metric likelihood only (the metric is "
+                             f"{args.metric})", field="--temperature")
+    temperature = DEFAULT_TEMPERATURE if args.temperature is None else args.temperature
     out = writable_folder(args.out)
     episodes, _ = _load_episodes(args)
     configs = source_grid(independent_mid=args.independent_mid)
@@ -142,7 +146,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
         with progress_bar(len(episodes) * len(dims), f"fit {args.strategy}") as bar:
             result = fit(episodes, args.strategy, dims, args.metric, args.repeats, args.seed,
                          args.form, configs, progress=bar.update, protocol=args.protocol,
-                         workers=args.workers, temperature=args.temperature)
+                         workers=args.workers, temperature=temperature)
     except StrategyError as exc:  # a plugin that raises or returns a non-candidate
         raise UserInputError(str(exc), field="--strategy") from None
     except ValueError as exc:
@@ -222,8 +226,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-#: A likelihood's softmax temperature: > 0 (0 would make every other choice impossible).
-temperature_float = float_in_range(0.0, 1e6, "a temperature > 0 and <= 1e6", open_minimum=True)
+#: A likelihood's softmax temperature (0 would make every other choice impossible; far
+#: below 1e-6 a cost over it overflows).
+temperature_float = float_in_range(1e-6, 1e6, "a temperature from 1e-06 to 1e6")
 
 
 def _add_data_arguments(p: argparse.ArgumentParser, metrics: tuple[str, ...]) -> None:
@@ -269,7 +274,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     fit_cmd = sub.add_parser("fit", help="grid-search a strategy's parameters (Table 3.4)")
     _add_data_arguments(fit_cmd, FIT_METRICS)
-    fit_cmd.add_argument("--temperature", type=temperature_float, default=DEFAULT_TEMPERATURE,
+    fit_cmd.add_argument("--temperature", type=temperature_float,
                          help="with --metric likelihood: the choice rule's softmax "
                               "temperature, P(item) ~ exp(-cost / T) (default "
                               f"{DEFAULT_TEMPERATURE}, as `simulate` draws)")

@@ -100,8 +100,6 @@ def baseline_score(episode: Episode, metric: str, rng: np.random.Generator | Non
         return random_ape(episode, protocol), True
     if metric == "likelihood":
         return random_nll(episode, protocol), True
-    if metric == "likelihood":
-        return random_nll(episode, protocol), True
     return random_edit(episode, restricted=metric == "edit" or is_reference(protocol))
 
 

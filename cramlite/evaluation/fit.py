@@ -164,14 +164,20 @@ def grid_probabilities(episode: Episode, configs: np.ndarray, dims: str, form: s
     return np.array(rows).reshape(-1, len(configs))
 
 
+#: The lowest temperature the likelihood is computed at: a cost difference over it stays
+#: a finite number (at 1e-308 and below it overflows, and every score is infinite).
+MIN_TEMPERATURE = 1e-6
+
+
 def grid_nll(episode: Episode, configs: np.ndarray, dims: str, form: str,
              kind: str = "opm", protocol: str = "heldout",
              temperature: float = DEFAULT_TEMPERATURE) -> np.ndarray:
     """Negative log-likelihood (nats) of each teacher-forced step's observed choice at
     every grid point, (steps, G), under the softmax choice rule `simulate` draws with:
     P(item) proportional to exp(-cost / temperature) (an item named twice: either)."""
-    if not math.isfinite(temperature) or temperature <= 0:
-        raise ValueError(f"the likelihood needs a temperature > 0, got {temperature}")
+    if not math.isfinite(temperature) or temperature < MIN_TEMPERATURE:
+        raise ValueError(f"the likelihood needs a temperature >= {MIN_TEMPERATURE:g}, got "
+                         f"{temperature}")
     rows = []
     for cost, observed in _grid_costs(episode, configs, dims, form, kind, protocol):
         z = -(cost - cost.min(axis=1, keepdims=True)) / temperature  # (the best: 0)

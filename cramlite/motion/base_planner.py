@@ -33,7 +33,8 @@ class BasePlannerOptions:
     #: alone: `motion.budget`). A query in v1-v5 and c1-c3 needs at most ~330.
     max_checks: int = 20_000
     #: False: reduce vertices and rope-shortcut (~10 ms); True: OMPL's full `simplify`
-    #: (~60 ms here, paths ~8 % shorter on detours).
+    #: (~60 ms here, paths ~8 % shorter on detours; it stops on the clock, so with it a
+    #: path depends on the host's speed again, not on the seed alone).
     full_simplify: bool = False
     simplify_time_s: float = 0.05
     #: Distance / turn between executed waypoints (every one is checked).

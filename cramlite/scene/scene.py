@@ -391,7 +391,7 @@ class PlanningScene:
         if name in self.belief.held:
             return self.held_matrix(name)
         position, orientation = self.belief.poses[name]
-        key = (*map(float, position), *map(float, orientation))
+        key = np.array((*position, *orientation), dtype=float).tobytes()  # (-0.0 is not 0.0)
         found = self._item_matrices.get(name)
         if found is None or found[0] != key:
             found = self._item_matrices[name] = (key, pose_matrix(position, orientation))
