@@ -446,16 +446,13 @@ class ConfigurationChecks:
         return self._scene(holding).states_free(np.array([self._vector(j)
                                                           for j in configurations]))
 
-    def path_free(self, start: dict[str, float], goal: dict[str, float], holding: bool) -> bool:
-        """Is the straight joint-space path between two checked configurations free?
-        (Checked at every fourth step: it only ranks candidates, and the motion itself is
-        checked at every step when it is executed; on v1-v5 and c1-c3 every fourth step
-        ranks as every second did, the 16 trials' traces byte-identical, in less time.)"""
-        return self.paths_free([(start, goal)], holding)
-
     def paths_free(self, paths: list[tuple[dict[str, float], dict[str, float]]],
                    holding: bool) -> bool:
-        """`path_free` for every one of these (start, goal) pairs (checked as one batch)."""
+        """Is the straight joint-space path between each of these pairs of checked
+        configurations free (all checked as one batch)? (Checked at every fourth step: it
+        only ranks candidates, and the motion itself is checked at every step when it is
+        executed; on v1-v5 and c1-c3 every fourth step ranks as every second did, the 16
+        trials' traces byte-identical, in less time.)"""
         if not paths:
             return True
         limits = self.ctx.limits

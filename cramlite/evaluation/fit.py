@@ -198,13 +198,10 @@ def _vector_scores(episodes: Sequence[Episode], configs: np.ndarray, dims: str, 
                    temperature: float = DEFAULT_TEMPERATURE) -> np.ndarray:
     table = np.zeros((len(episodes), len(configs)))
     for e, episode in enumerate(episodes):
-        if len(episode) >= 2:
-            if metric == "likelihood":
-                table[e] = grid_nll(episode, configs, dims, form, kind, protocol,
-                                    temperature).sum(axis=0)
-                if progress:
-                    progress(1)
-                continue
+        if len(episode) >= 2 and metric == "likelihood":
+            table[e] = grid_nll(episode, configs, dims, form, kind, protocol,
+                                temperature).sum(axis=0)
+        elif len(episode) >= 2:
             probs = grid_probabilities(episode, configs, dims, form, kind, protocol)
             if metric == "expected-ape":
                 table[e] = (1.0 - probs).sum(axis=0)

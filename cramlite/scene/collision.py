@@ -511,9 +511,8 @@ class MotionCheck:
         self._lo_t, self._hi_t = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
         self._turned_mask = np.zeros(len(self.obstacles), dtype=bool)
         self._turned_mask[list(turned)] = True
-        self._obstacle_refs = (placements[:, :3, :3] @ layout.refs[:, :, None])[:, :, 0] + \
-            placements[:, :3, 3]
-        self._obstacle_refs_list = self._obstacle_refs.tolist()
+        self._obstacle_refs_list = ((placements[:, :3, :3] @ layout.refs[:, :, None])[:, :, 0]
+                                    + placements[:, :3, 3]).tolist()
         self._transforms: dict[int, coal.Transform3s] = {}
 
     def _item_matrix(self, name: str) -> np.ndarray:
