@@ -88,3 +88,86 @@ def test_a_thin_wall_through_a_link_is_a_collision() -> None:
     assert contact.depth_m > 0.01, contact.describe()
     scene.belief.poses["bowl"] = ((bottom[0], bottom[1], bottom[2] + 1.0), (0, 0, 0, 1.0))
     assert SceneCollisions(scene).check(arm_joint_names("right")).is_free(check.current())
+
+
+def test_oriented_boxes_are_apart_only_where_coal_finds_them_apart() -> None:
+    """The broadphase's oriented test against coal's distance of the same boxes (turned at
+    random, some square to each other, some alike): never "apart" where they are within
+    the gap, and it finds nearly every pair that is clearly apart (it leaves out the
+    edge-edge axes, so a few)."""
+    from scipy.spatial.transform import Rotation
+
+    from cramlite.scene.geometry import boxes_apart
+
+    m = 3000
+    rng = np.random.default_rng(7)
+    axes_a = Rotation.random(m, random_state=1).as_matrix()
+    axes_b = Rotation.random(m, random_state=2).as_matrix()
+    axes_a[:300] = axes_b[:300] = np.eye(3)
+    axes_b[300:600] = axes_a[300:600]
+    centres_a, centres_b = rng.normal(0, 0.3, (m, 3)), rng.normal(0, 0.3, (m, 3))
+    halves_a, halves_b = rng.uniform(0.01, 0.3, (m, 3)), rng.uniform(0.01, 0.3, (m, 3))
+    for gap in (0.0, 0.02):
+        apart = boxes_apart(axes_a, centres_a, halves_a, axes_b, centres_b, halves_b, gap)
+        distances = np.empty(m)
+        for i in range(m):
+            result = coal.DistanceResult()
+            coal.distance(coal.Box(*(2 * halves_a[i])), coal.Transform3s(axes_a[i], centres_a[i]),
+                          coal.Box(*(2 * halves_b[i])), coal.Transform3s(axes_b[i], centres_b[i]),
+                          coal.DistanceRequest(), result)
+            distances[i] = result.min_distance
+        assert not np.any(apart & (distances <= gap))
+        clearly = distances > gap + 0.02
+        print(gap, "apart", int(apart.sum()), "clearly apart", int(clearly.sum()))
+        assert apart[clearly].mean() > 0.9
+
+
+def test_a_layouts_pairs_follow_the_rules_pair_by_pair() -> None:
+    """The checked part-obstacle and part-part pairs of a motion's layout, worked out as
+    matrices, are those the rules give one pair at a time: robot links by the SRDF and
+    whether the motion moves them apart, a held item never against its own gripper,
+    what the motion may touch left out, no robot pairs without self-collision."""
+    from cramlite.scene.collision import HeldObject
+
+    scene = PlanningScene(load_setup("c1"))
+    collisions = SceneCollisions(scene)
+    robot = scene.robot
+    cup = HeldObject("cup", "right", np.eye(4))
+    queries = [(arm_joint_names("right"), [], frozenset(), True),
+               (arm_joint_names("left"), [cup], frozenset({"bowl", "drawer_1"}), True),
+               (["torso_lift_joint", *arm_joint_names("right")], [cup], frozenset(), True),
+               (arm_joint_names("right"), [cup], frozenset({"cup"}), False)]
+    for joints, held, ignore, self_collision in queries:
+        layout = collisions.layout(joints, held, ignore, self_collision)
+        grips = collisions.gripper_links
+        arms = {h.name: h.arm for h in held}
+
+        def touch(p, o):
+            if o.owner in ignore and o.kind in ("kitchen", "item"):
+                return False
+            if o.kind in ("robot", "held") and not self_collision:
+                return False
+            if o.kind == "robot":
+                return (robot.may_collide(p.robot_link, o.owner) if p.robot_link
+                        else o.owner not in grips[p.held_arm])
+            if o.kind == "held":
+                return p.robot_link is None or p.robot_link not in grips[arms[o.owner]]
+            return True
+
+        def meet(a, b):
+            if a.moving_joints == b.moving_joints or not self_collision:
+                return False
+            if a.robot_link and b.robot_link:
+                return robot.may_collide(a.robot_link, b.robot_link)
+            if a.robot_link is None and b.robot_link is None:
+                return True
+            item, link = (a, b) if a.robot_link is None else (b, a)
+            return link.robot_link not in grips[item.held_arm]
+
+        expected = [[touch(p, o) for o in layout.obstacles] for p in layout.parts]
+        assert layout.allowed.tolist() == expected
+        parts = layout.parts
+        assert layout.pairs.tolist() == [[i, j] for i in range(len(parts))
+                                         for j in range(i + 1, len(parts))
+                                         if meet(parts[i], parts[j])]
+        assert layout.allowed.any() and (len(layout.pairs) > 0) == self_collision

@@ -13,9 +13,11 @@ state is free when:
 - no held item is inside the kitchen, another item or the robot (its own gripper's palm
   and fingers aside), and no moving link is inside what the other hand holds.
 
-Broadphase: a sphere about each moving shape against the boxes (axis-aligned, or turned
-where a door has swung open) of everything that stands still, and against the spheres of
-the other moving shapes, a few numpy calls for every state of a motion at once. Narrow
+Broadphase, a few numpy calls for every state of a motion at once: each shape's bounds
+(a box in its own frame) as an axis-aligned box in the world, against those of everything
+that stands still and of the other moving shapes; the pairs that meet then as oriented
+boxes (the face axes of the separating-axis test), which leaves about one pair in six
+(an open door's turned box, a forearm across the counter's corner). Narrow
 phase: coal's exact test on the real meshes. coal sees surfaces that cross; a shape wholly
 inside a mesh (a fingertip inside the shoulder's housing) crosses none, so where a shape
 could lie inside a mesh the winding number of one of its points decides
@@ -33,6 +35,7 @@ import numpy as np
 
 from cramlite.scene.geometry import (
     PointGrid,
+    boxes_apart,
     convex_hull_planes,
     inside_mesh,
     point_triangle_distances,
@@ -50,6 +53,9 @@ from cramlite.scene.transforms import planar, planar_many
 #: finger pad on the counter beside a spoon) are not collisions. The trace's check allows
 #: 1 cm, along the motion between states too.
 TOLERANCE_M = 0.006
+#: Oriented bounds further apart than the margin by more than this hold shapes that
+#: cannot touch (the slack keeps coal's own rounding on the safe side).
+BOX_SLACK_M = 1e-5
 #: Spacing of the surface points by which a mesh's depth inside a primitive is measured.
 SAMPLE_SPACING_M = 0.01
 #: Those points, by shape (the models, and so their shapes, live for the process).
@@ -126,10 +132,12 @@ class _Layout:
     item_index: np.ndarray
     item_names: tuple[str, ...]
     others: np.ndarray
-    #: the local bounds' centres and half sizes of those others, and which are boxes
+    #: the local bounds' centres and half sizes of those others
     others_centres: np.ndarray
     others_halves: np.ndarray
-    others_boxes: np.ndarray
+    #: every obstacle's local bounds: centre and half sizes (O x 3, shape frame)
+    centres: np.ndarray
+    halves: np.ndarray
 
 
 def _transform(matrix: np.ndarray) -> coal.Transform3s:
@@ -138,28 +146,21 @@ def _transform(matrix: np.ndarray) -> coal.Transform3s:
 
 
 def _bounds(shapes: Sequence[Shape], placements: np.ndarray,
-            ) -> tuple[np.ndarray, np.ndarray, dict[int, tuple]]:
-    """Axis-aligned bounds (lo, hi: N x 3) of placed shapes (their local bounds turned),
-    and the boxes among them turned about an axis (index -> centre, rotation, half)."""
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned bounds (lo, hi: N x 3) of placed shapes (their local bounds turned)."""
     if not len(shapes):
-        return np.zeros((0, 3)), np.zeros((0, 3)), {}
+        return np.zeros((0, 3)), np.zeros((0, 3))
     return _placed_bounds(np.array([s.centre for s in shapes]),
-                          np.array([s.half for s in shapes]),
-                          np.array([s.kind == BOX for s in shapes]), placements)
+                          np.array([s.half for s in shapes]), placements)
 
 
-def _placed_bounds(centres: np.ndarray, halves: np.ndarray, boxes: np.ndarray,
-                   placements: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict[int, tuple]]:
-    """`_bounds` of shapes given by their local bounds' centres and half sizes (N x 3) and
-    which of them are boxes."""
+def _placed_bounds(centres: np.ndarray, halves: np.ndarray, placements: np.ndarray,
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """`_bounds` of shapes given by their local bounds' centres and half sizes (N x 3)."""
     rotations = placements[:, :3, :3]
     mid = (rotations @ centres[:, :, None])[:, :, 0] + placements[:, :3, 3]
     span = (np.abs(rotations) @ halves[:, :, None])[:, :, 0]
-    turned = {}
-    square = np.abs(rotations).max(axis=1).min(axis=1) >= 1 - 1e-6
-    for k in np.flatnonzero(~square & boxes).tolist():
-        turned[k] = (mid[k], rotations[k], halves[k])
-    return mid - span, mid + span, turned
+    return mid - span, mid + span
 
 
 class SceneCollisions:
@@ -182,6 +183,8 @@ class SceneCollisions:
         self._requests: dict[float, coal.CollisionRequest] = {}
         self._eroded: dict[tuple, coal.CollisionGeometry | None] = {}
         self._part_frames: dict[tuple, tuple[_Layout, tuple]] = {}
+        self._above: dict[str, frozenset[str]] = {}
+        self._link_pairs: tuple[dict[str, int], np.ndarray] | None = None
 
     def enclosed(self, a: Shape, pa: np.ndarray, b: Shape, pb: np.ndarray) -> bool:
         """Does one shape lie wholly inside the other, a mesh (no surfaces cross)? Then a
@@ -303,7 +306,7 @@ class SceneCollisions:
         parts: list[_Part] = []
         obstacles: list[_Obstacle] = []
         for link, shapes in robot.shapes_by_link.items():
-            above = frozenset(moving & set(robot.joints_above(link)))
+            above = frozenset(moving & self._joints_above(link))
             for shape in shapes:
                 if above:
                     parts.append(_Part(link, shape, link, link, None, None, above))
@@ -311,7 +314,7 @@ class SceneCollisions:
                     obstacles.append(_Obstacle(link, shape, "robot", link, link))
         for item in held:
             tool = tool_frame(item.arm)
-            above = frozenset(moving & set(robot.joints_above(tool)))
+            above = frozenset(moving & self._joints_above(tool))
             for shape in scene.items[item.name].model.shapes:
                 if above:
                     parts.append(_Part(repr(item.name), shape, tool, None, item.name,
@@ -329,13 +332,8 @@ class SceneCollisions:
         links = tuple(dict.fromkeys(p.frame_link for p in parts))
         rows = np.array([links.index(p.frame_link) for p in parts], dtype=int)
         arms = {h.name: h.arm for h in held}
-        allowed = np.array([[self._may_touch(p, o, arms, ignore) and
-                             (self_collision or o.kind not in ("robot", "held"))
-                             for o in obstacles] for p in parts],
-                           dtype=bool).reshape(len(parts), len(obstacles))
-        pairs = np.array([(i, j) for i in range(len(parts)) for j in range(i + 1, len(parts))
-                          if self_collision and self._may_meet(parts[i], parts[j])],
-                         dtype=int).reshape(-1, 2)
+        allowed = self._allowed(parts, obstacles, arms, ignore, self_collision)
+        pairs = self._meeting_pairs(parts) if self_collision else np.zeros((0, 2), dtype=int)
         static = tuple(dict.fromkeys(o.frame_link for o in obstacles if o.frame_link))
         in_link = np.array([o.shape.in_link for o in obstacles]).reshape(-1, 4, 4)
         refs = np.array([_reference_point(o.shape) for o in obstacles]).reshape(-1, 3)
@@ -358,14 +356,15 @@ class SceneCollisions:
                        item_names, index(others, dtype=int),
                        np.array([obstacles[k].shape.centre for k in others]).reshape(-1, 3),
                        np.array([obstacles[k].shape.half for k in others]).reshape(-1, 3),
-                       np.array([obstacles[k].shape.kind == BOX for k in others], dtype=bool))
+                       np.array([o.shape.centre for o in obstacles]).reshape(-1, 3),
+                       np.array([o.shape.half for o in obstacles]).reshape(-1, 3))
 
     def parts_in_frames(self, layout: _Layout, held: Sequence[HeldObject],
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                                   np.ndarray, np.ndarray]:
+                                   np.ndarray]:
         """For a layout's parts held as `held`: each shape's placement in the frame of the
-        link carrying it, its bounds' centre there, half sizes, bounding radius, rotation
-        there, and the point `enclosed` tests (kept per layout and held poses)."""
+        link carrying it, its bounds' centre there, half sizes, rotation there, and the
+        point `enclosed` tests (kept per layout and held poses)."""
         relative = {h.name: h.relative for h in held}
         key = (id(layout), tuple((h.name, np.asarray(h.relative).tobytes()) for h in held))
         found = self._part_frames.get(key)
@@ -377,16 +376,68 @@ class SceneCollisions:
         shapes = [p.shape for p in parts]
         centres = np.array([sh.centre for sh in shapes]).reshape(-1, 3)
         halves = np.array([sh.half for sh in shapes]).reshape(-1, 3)
-        radii = np.array([sh.radius for sh in shapes])
         rotations = in_frame[:, :3, :3]
         centres = (rotations @ centres[:, :, None])[:, :, 0] + in_frame[:, :3, 3]
         refs = np.array([f[:3, :3] @ _reference_point(sh) + f[:3, 3]
                          for f, sh in zip(in_frame, shapes, strict=True)]).reshape(-1, 3)
         if len(self._part_frames) > 4096:
             self._part_frames.clear()
-        value = (in_frame, centres, halves, radii, rotations, refs)
+        value = (in_frame, centres, halves, rotations, refs)
         self._part_frames[key] = (layout, value)
         return value
+
+    def _joints_above(self, link: str) -> frozenset[str]:
+        """The moving joints between the root and a link (kept: asked per link per
+        layout)."""
+        above = self._above.get(link)
+        if above is None:
+            above = self._above[link] = frozenset(self.scene.robot.joints_above(link))
+        return above
+
+    def _allowed(self, parts: Sequence[_Part], obstacles: Sequence[_Obstacle],
+                 arms: dict[str, str], ignore: frozenset[str],
+                 self_collision: bool) -> np.ndarray:
+        """Which part may touch which obstacle (parts x obstacles): `_may_touch` of every
+        pair, column by column for the kitchen and the items (the same for every part)
+        and a row a part for the robot's links (by the robot's pairs, kept)."""
+        allowed = np.ones((len(parts), len(obstacles)), dtype=bool)
+        robot_cols, held_cols = [], []
+        for k, o in enumerate(obstacles):
+            if o.kind == "robot":
+                robot_cols.append(k)
+            elif o.kind == "held":
+                held_cols.append(k)
+            elif o.owner in ignore:
+                allowed[:, k] = False
+        if not (robot_cols or held_cols) or not len(parts):
+            return allowed
+        if not self_collision:
+            allowed[:, robot_cols + held_cols] = False
+            return allowed
+        index, pairs = self._robot_pairs()
+        owners = [index[obstacles[k].owner] for k in robot_cols]
+        for i, part in enumerate(parts):
+            if part.robot_link is not None:
+                allowed[i, robot_cols] = pairs[index[part.robot_link], owners]
+            else:
+                allowed[i, robot_cols] = [obstacles[k].owner not in
+                                          self.gripper_links[part.held_arm]
+                                          for k in robot_cols]
+            for k in held_cols:
+                allowed[i, k] = self._may_touch(part, obstacles[k], arms, ignore)
+        return allowed
+
+    def _robot_pairs(self) -> tuple[dict[str, int], np.ndarray]:
+        """The robot's links with shapes (name -> index) and which pairs of them may
+        collide (`ArticulatedModel.may_collide`), worked out once."""
+        if self._link_pairs is None:
+            robot = self.scene.robot
+            links = list(robot.shapes_by_link)
+            self._link_pairs = ({link: i for i, link in enumerate(links)},
+                                np.array([[robot.may_collide(a, b) for b in links]
+                                          for a in links],
+                                         dtype=bool).reshape(len(links), len(links)))
+        return self._link_pairs
 
     def _may_touch(self, part: _Part, obstacle: _Obstacle, arms: dict[str, str],
                    ignore: frozenset[str]) -> bool:
@@ -401,22 +452,31 @@ class SceneCollisions:
                 part.robot_link not in self.gripper_links[arms[obstacle.owner]]
         return True
 
-    def _may_meet(self, a: _Part, b: _Part) -> bool:
-        """Two moving parts are checked if the motion moves them apart and they may
-        touch: two robot links the SRDF allows, a held item and a link of another gripper
-        than its own, two held items."""
-        if a.moving_joints == b.moving_joints:
-            return False  # (they move together)
-        if a.robot_link is not None and b.robot_link is not None:
-            return self.scene.robot.may_collide(a.robot_link, b.robot_link)
-        if a.robot_link is None and b.robot_link is None:
-            return True
-        item, link = (a, b) if a.robot_link is None else (b, a)
-        return link.robot_link not in self.gripper_links[item.held_arm]
+    def _meeting_pairs(self, parts: Sequence[_Part]) -> np.ndarray:
+        """The pairs (i < j, k x 2) of moving parts checked against each other, as one
+        matrix: two robot links the SRDF allows, a held item and a link of another
+        gripper than its own, two held items; never two parts the motion moves together
+        (they never move apart)."""
+        n = len(parts)
+        index, robot_pairs = self._robot_pairs()
+        links = [i for i, p in enumerate(parts) if p.robot_link is not None]
+        items = [i for i, p in enumerate(parts) if p.robot_link is None]
+        meet = np.zeros((n, n), dtype=bool)
+        if links:
+            rows = [index[parts[i].robot_link] for i in links]
+            meet[np.ix_(links, links)] = robot_pairs[np.ix_(rows, rows)]
+        for i in items:
+            grip = self.gripper_links[parts[i].held_arm]
+            meet[i, links] = meet[links, i] = [parts[j].robot_link not in grip for j in links]
+            meet[i, items] = True
+        groups = {}
+        together = np.array([groups.setdefault(p.moving_joints, len(groups)) for p in parts])
+        meet &= together[:, None] != together[None, :]
+        return np.argwhere(np.triu(meet, 1)).astype(int).reshape(-1, 2)
 
     def kitchen_block(self, world_joints: dict[str, float],
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
-        """The kitchen's shapes placed (K x 4 x 4), their bounds and turned boxes, with the
+        """The kitchen's shapes placed (K x 4 x 4) and their bounds, with the
         drawers and doors at `world_joints` (kept by their values)."""
         key = tuple(round(world_joints[n], 9) for n in self.scene.kitchen.joints)
         block = self._kitchen.get(key)
@@ -455,9 +515,9 @@ class MotionCheck:
         self.obstacles = layout.obstacles
         self._rows = layout.rows
         self._allowed, self._pairs = layout.allowed, layout.pairs
-        #: each part's placement, bounds' centre, half sizes, radius and rotation in the
-        #: frame of the link carrying it, and its point that `enclosed` tests
-        (self._in_frame, self._centres, self._halves, self._radii, self._rotations,
+        #: each part's placement, bounds' centre, half sizes and rotation in the frame of
+        #: the link carrying it, and its point that `enclosed` tests
+        (self._in_frame, self._centres, self._halves, self._rotations,
          self._refs) = owner.parts_in_frames(layout, held)
         self._static_frames = scene.link_matrices(layout.static_links, self.values, self.base) \
             if layout.static_links else {}
@@ -481,8 +541,7 @@ class MotionCheck:
         layout = self.layout
         placements = np.empty((len(self.obstacles), 4, 4))
         relative = {h.name: h.relative for h in self.held}
-        kitchen_placed, kitchen_lo, kitchen_hi, kitchen_turned = \
-            self.owner.kitchen_block(self._world_joints)
+        kitchen_placed, kitchen_lo, kitchen_hi = self.owner.kitchen_block(self._world_joints)
         if len(layout.static_links):
             static = np.array([self._static_frames[link] for link in layout.static_links])
             if len(layout.robot_obstacles):
@@ -500,19 +559,18 @@ class MotionCheck:
         others = layout.others.tolist()
         lo, hi = np.empty((len(self.obstacles), 3)), np.empty((len(self.obstacles), 3))
         lo[layout.kitchen], hi[layout.kitchen] = kitchen_lo, kitchen_hi
-        turned = {k + layout.kitchen.start: v for k, v in kitchen_turned.items()}
         if others:
-            o_lo, o_hi, o_turned = _placed_bounds(layout.others_centres, layout.others_halves,
-                                                  layout.others_boxes, placements[others])
-            lo[others], hi[others] = o_lo, o_hi
-            turned.update({others[k]: v for k, v in o_turned.items()})
-        self._placements, self._lo, self._hi, self._turned = placements, lo, hi, turned
+            lo[others], hi[others] = _placed_bounds(layout.others_centres,
+                                                    layout.others_halves, placements[others])
+        self._placements, self._lo, self._hi = placements, lo, hi
         self._lo_list, self._hi_list = lo.tolist(), hi.tolist()
         self._lo_t, self._hi_t = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
-        self._turned_mask = np.zeros(len(self.obstacles), dtype=bool)
-        self._turned_mask[list(turned)] = True
         self._obstacle_refs_list = ((placements[:, :3, :3] @ layout.refs[:, :, None])[:, :, 0]
                                     + placements[:, :3, 3]).tolist()
+        # each obstacle's bounds as an oriented box (axes, centre; half sizes: the layout's)
+        self._box_axes = placements[:, :3, :3]
+        self._box_centres = (self._box_axes @ layout.centres[:, :, None])[:, :, 0] + \
+            placements[:, :3, 3]
         self._transforms: dict[int, coal.Transform3s] = {}
 
     def _item_matrix(self, name: str) -> np.ndarray:
@@ -543,19 +601,20 @@ class MotionCheck:
 
     def _near(self, frames: np.ndarray, margin: float = 0.0,
               ) -> tuple[np.ndarray, np.ndarray]:
-        """Broadphase for S states: (S x parts x obstacles) parts whose boxes (their local
-        bounds turned into the world, axis-aligned) meet obstacle boxes, and (S x pairs)
-        moving parts whose boxes meet; and the boxes (S x P x 3 centres and half spans) and
-        the points `enclosed` tests (S x P x 3), for `_nested_test`.
-        A turned obstacle box (an open door) is tested against the part's bounding
-        sphere, not its axis-aligned bounds."""
+        """Broadphase for S states: (S x parts x obstacles) parts whose bounds meet an
+        obstacle's, and (S x pairs) moving parts whose bounds meet; and the boxes (S x P x 3
+        centres and half spans, axis-aligned) and the points `enclosed` tests (S x P x 3),
+        for `_nested_test`. Bounds are first compared axis-aligned (each part's over all
+        the states, then state by state), then the pairs that meet so as oriented boxes
+        (most of them turn out apart: a narrow test each saved)."""
         s = len(frames)
         placed = frames[:, self._rows]  # S x P x 4 x 4
         rotations = placed[..., :3, :3]
         centres = (rotations @ self._centres[None, :, :, None])[..., 0] + placed[..., :3, 3]
         pad = max(0.0, margin)
-        spans = np.abs(rotations @ self._rotations) @ self._halves[None, :, :, None]
-        spans = spans[..., 0] + pad  # S x P x 3
+        gap = pad + BOX_SLACK_M
+        axes = rotations @ self._rotations  # S x P x 3 x 3: each part's bounds' axes
+        spans = (np.abs(axes) @ self._halves[None, :, :, None])[..., 0] + pad  # S x P x 3
         refs = (rotations @ self._refs[None, :, :, None])[..., 0] + placed[..., :3, 3]
         near = np.zeros((s, len(self.parts), len(self.obstacles)), dtype=bool)
         # (comparisons laid out x, y, z first: numpy reduces a leading axis of three
@@ -574,28 +633,26 @@ class MotionCheck:
             p, k = np.nonzero(may)
             if len(p):
                 if s == 1:
-                    near[0, p, k] = True
+                    state = np.zeros(len(p), dtype=int)
                 else:
                     c, h = c_t[:, :, p], s_t[:, :, p]  # 3 x S x M
-                    near[:, p, k] = ((lo_t[:, None, k] <= c + h) &
-                                     (hi_t[:, None, k] >= c - h)).all(axis=0)
-                if self._turned:
-                    radii = self._radii + pad
-                    for i in np.flatnonzero(self._turned_mask[k]).tolist():
-                        part, obstacle = int(p[i]), int(k[i])
-                        states = np.flatnonzero(near[:, part, obstacle])
-                        if not len(states):
-                            continue
-                        centre, rotation, half = self._turned[obstacle]
-                        local = (centres[states, part] - centre) @ rotation
-                        gap = np.maximum(np.abs(local) - half, 0.0)
-                        near[states, part, obstacle] = \
-                            (gap * gap).sum(axis=1) < radii[part] ** 2
+                    state, m = np.nonzero(((lo_t[:, None, k] <= c + h) &
+                                           (hi_t[:, None, k] >= c - h)).all(axis=0))
+                    p, k = p[m], k[m]
+                close = ~boxes_apart(axes[state, p], centres[state, p], self._halves[p],
+                                     self._box_axes[k], self._box_centres[k],
+                                     self.layout.halves[k], gap)
+                near[state[close], p[close], k[close]] = True
         meets = np.zeros((s, len(self._pairs)), dtype=bool)
         if len(self._pairs):
             a, b = self._pairs[:, 0], self._pairs[:, 1]
-            meets = (np.abs(c_t[:, :, a] - c_t[:, :, b]) <=
-                     s_t[:, :, a] + s_t[:, :, b]).all(axis=0)
+            state, pair = np.nonzero((np.abs(c_t[:, :, a] - c_t[:, :, b]) <=
+                                      s_t[:, :, a] + s_t[:, :, b]).all(axis=0))
+            if len(state):
+                a, b = a[pair], b[pair]
+                close = ~boxes_apart(axes[state, a], centres[state, a], self._halves[a],
+                                     axes[state, b], centres[state, b], self._halves[b], gap)
+                meets[state[close], pair[close]] = True
         return near, meets, (centres, spans, refs)
 
     def _nested_test(self, boxes: tuple[np.ndarray, np.ndarray, np.ndarray],
@@ -622,14 +679,16 @@ class MotionCheck:
 
         return part_obstacle, part_part
 
-    def states_free(self, states: np.ndarray, order: Sequence[int] | None = None) -> bool:
-        """Every state (rows of joint vectors) free: one broadphase for all of them, then
-        exact checks of the states that need one, in `order` (default: as given)."""
+    def states_free(self, states: np.ndarray, order: Sequence[int] | None = None,
+                    margin_m: float = 0.0) -> bool:
+        """Every state (rows of joint vectors) free (keeping `margin_m` further away): one
+        broadphase for all of them, then exact checks of the states that need one, in
+        `order` (default: as given), up to the first that collides."""
         states = np.asarray(states, dtype=float).reshape(-1, len(self.joints))
         self.checks += len(states)
         if not len(states) or not len(self.parts):
             return True
-        return self._frames_free(self._link_frames(states), order)
+        return self._frames_free(self._link_frames(states), order, margin_m)
 
     def states_free_along(self, bases: np.ndarray, states: np.ndarray) -> bool:
         """`states_free` with the base at its own pose (x, y, yaw) in each state: a drive
@@ -647,14 +706,15 @@ class MotionCheck:
         worlds = planar_many(bases)
         return self._frames_free(worlds[:, None] @ local, None)
 
-    def _frames_free(self, frames: np.ndarray, order: Sequence[int] | None) -> bool:
+    def _frames_free(self, frames: np.ndarray, order: Sequence[int] | None,
+                     margin: float = 0.0) -> bool:
         """The broadphase and exact checks of `states_free` on the links' world frames."""
         if not self._kept_upright(frames):
             return False
-        near, meets, boxes = self._near(frames)
+        near, meets, boxes = self._near(frames, margin)
         flagged = set(np.flatnonzero(near.any(axis=(1, 2)) | meets.any(axis=1)).tolist())
         for i in (order if order is not None else range(len(frames))):
-            if i in flagged and not self._state_free(frames[i], near[i], meets[i], 0.0,
+            if i in flagged and not self._state_free(frames[i], near[i], meets[i], margin,
                                                      tuple(b[i] for b in boxes)):
                 return False
         return True

@@ -190,3 +190,22 @@ def convex_hull_planes(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         points.append(vertex)
     hull = coal.Convex.convexHull(points, True, None)
     return np.array(hull.normals(), dtype=float), np.array(hull.offsets(), dtype=float)
+
+
+def boxes_apart(axes_a: np.ndarray, centres_a: np.ndarray, halves_a: np.ndarray,
+                axes_b: np.ndarray, centres_b: np.ndarray, halves_b: np.ndarray,
+                gap: float) -> np.ndarray:
+    """Which of M pairs of oriented boxes are more than `gap` apart along one of the
+    boxes' six face normals (bool, M): the face axes of the separating-axis test
+    (Gottschalk et al. 1996; Ericson, Real-Time Collision Detection 4.4.1). Axes are the
+    columns of the M x 3 x 3 rotations, centres and half sizes M x 3. True only for boxes
+    that are apart (so the shapes inside them are); the nine edge-edge axes are left out:
+    they find a few more separations at three times the cost."""
+    turned = axes_a.transpose(0, 2, 1)
+    r = turned @ axes_b  # R[i, k] = a_i . b_k
+    t = (turned @ (centres_b - centres_a)[:, :, None])[..., 0]  # in a's frame
+    ar = np.abs(r) + 1e-9
+    apart = (np.abs(t) > halves_a + (ar @ halves_b[:, :, None])[..., 0] + gap).any(axis=1)
+    t_b = (t[:, None, :] @ r)[:, 0]
+    apart |= (np.abs(t_b) > (halves_a[:, None, :] @ ar)[:, 0] + halves_b + gap).any(axis=1)
+    return apart
