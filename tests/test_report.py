@@ -315,3 +315,57 @@ def test_pictures_that_cannot_be_written_are_one_line(bench_dir: Path, tmp_path)
     assert done.returncode == 2, done.stderr
     lines = done.stderr.strip().splitlines()
     assert "Traceback" not in done.stderr and "cannot write the report's pictures" in lines[-1]
+
+
+def _pid_and(value: int) -> tuple[int, int]:
+    import os
+
+    return os.getpid(), value
+
+
+def test_pictures_are_drawn_on_several_processes_in_order() -> None:
+    """The report's pictures are drawn on forked processes where there are several CPUs
+    (each result in its job's place), and here one by one while another thread runs."""
+    import os
+    import threading
+
+    from cramlite.report.build import _draw_all
+
+    jobs = [(_pid_and, (k,)) for k in range(12)]
+    results = _draw_all(jobs)
+    assert [v for _, v in results] == list(range(12))
+    if (os.cpu_count() or 1) > 1:
+        assert os.getpid() not in {pid for pid, _ in results}
+        assert len({pid for pid, _ in results}) > 1
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        assert {pid for pid, _ in _draw_all(jobs)} == {os.getpid()}
+    finally:
+        stop.set()
+        other.join()
+
+
+def test_pictures_drawn_at_once_are_those_drawn_one_by_one(bench_dir: Path, tmp_path) -> None:
+    """A report built by `cramlite report` (its pictures on several processes) has the
+    very pictures one built here one by one has (a thread runs: no fork)."""
+    import threading
+
+    from cramlite.report import build_report
+
+    apart, together = tmp_path / "apart", tmp_path / "together"
+    for folder in (apart, together):
+        shutil.copytree(bench_dir, folder, ignore=shutil.ignore_patterns("report*"))
+    assert cli("report", str(together), "--max-replays", "1").returncode == 0
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        build_report(apart, max_replays=1)
+    finally:
+        stop.set()
+        other.join()
+    drawn = {p.name: p.read_bytes() for p in (together / "report").iterdir()}
+    assert any(name.endswith(".gif") for name in drawn) and len(drawn) > 5
+    assert {p.name: p.read_bytes() for p in (apart / "report").iterdir()} == drawn

@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from cramlite.bench.specs import FIXED_ORDER
 from cramlite.errors import UserInputError
@@ -97,12 +98,10 @@ def _pictures(data: BenchFolder, page: PageData, media: Path, written: set[str],
                 "base_path_m_by_setup.png": "Driven base path per setup and strategy.",
                 "robot_time_s_aggregated.png": "Robot time, all setups together.",
                 "base_path_m_aggregated.png": "Driven base path, all setups together."}
-    for path in write_plots(data.rows, media):
-        written.add(path.name)
-        if path.name in captions:
-            page.plots.append((path.name, captions[path.name]))
-        else:
-            page.all_orders_plot = path.name
+    # every picture is drawn on its own (the plots, a map per setup, a timeline per trial
+    # of interest): on a few processes at once where that is safe (`_draw_all`)
+    jobs: list[tuple[Callable[..., Any], tuple]] = [(write_plots, (data.rows, media))]
+    maps: list[tuple[str, str]] = []
     for name in data.setup_names:
         setup = data.setups[name]
         if setup is None:
@@ -119,16 +118,55 @@ def _pictures(data: BenchFolder, page: PageData, media: Path, written: set[str],
             if best is None or int(row["trial"]) < int(best["trial"]):
                 highlighted[row["strategy"]] = row
         file = f"map-{safe_stem(name)}.png"
-        setup_map(layout, rows, data.strategies, page.colours, highlighted, media / file)
-        page.maps[name] = file
-        written.add(file)
+        jobs.append((setup_map, (layout, rows, data.strategies, page.colours, highlighted,
+                                 media / file)))
+        maps.append((name, file))
     if say:
         say(f"report: drawing {len(page.interest)} timelines")
     for row in page.interest:
-        file = f"timeline-{trial_id(row)}.png"
-        timeline(row, media / file)
-        page.timelines[trial_id(row)] = file
+        jobs.append((timeline, (row, media / f"timeline-{trial_id(row)}.png")))
+    from cramlite.report.figures import pyplot
+
+    results = _draw_all(jobs, pyplot)
+    for path in results[0]:
+        written.add(path.name)
+        if path.name in captions:
+            page.plots.append((path.name, captions[path.name]))
+        else:
+            page.all_orders_plot = path.name
+    for name, file in maps:
+        page.maps[name] = file
         written.add(file)
+    for row, path in zip(page.interest, results[1 + len(maps):], strict=True):
+        page.timelines[trial_id(row)] = path.name
+        written.add(path.name)
+
+
+#: The report's pictures are drawn on at most this many processes.
+MAX_DRAWING_PROCESSES = 4
+
+
+def _draw_all(jobs: list[tuple[Callable[..., Any], tuple]],
+              before: Callable[[], Any] | None = None) -> list[Any]:
+    """Each job's result (`function(*arguments)`), in order. Drawn on a few forked
+    processes when there are several CPUs and this process runs no other thread (a
+    fork copies what `before()` imports, once; a thread's locks could be copied held),
+    else here one after the other: the same pictures either way."""
+    import multiprocessing
+    import threading
+
+    processes = min(os.cpu_count() or 1, MAX_DRAWING_PROCESSES, len(jobs))
+    if processes < 2 or threading.active_count() > 1 or \
+            "fork" not in multiprocessing.get_all_start_methods():
+        return [function(*arguments) for function, arguments in jobs]
+    from concurrent.futures import ProcessPoolExecutor
+
+    if before is not None:
+        before()
+    context = multiprocessing.get_context("fork")
+    with ProcessPoolExecutor(processes, mp_context=context) as pool:
+        futures = [pool.submit(function, *arguments) for function, arguments in jobs]
+        return [future.result() for future in futures]
 
 
 def _replays(data: BenchFolder, page: PageData, media: Path, written: set[str],
@@ -139,6 +177,7 @@ def _replays(data: BenchFolder, page: PageData, media: Path, written: set[str],
     traced = [(r, t) for r, t in traced if t is not None]
     if say and traced:
         say(f"report: {min(len(traced), max_replays)} replay animations (kept between builds)")
+    drawn = []
     for k, (row, trace) in enumerate(traced):
         tid = trial_id(row)
         if k >= max_replays:
@@ -146,13 +185,19 @@ def _replays(data: BenchFolder, page: PageData, media: Path, written: set[str],
                                       f"{max_replays}; raise --max-replays, or `cramlite "
                                       f"replay {trace} --out FILE.gif`)")
             continue
-        file = replay_name(tid, speed)
-        problem = ensure_replay(trace, media / file, speed)
+        drawn.append((tid, replay_name(tid, speed), trace))
+    problems = _draw_all([(ensure_replay, (trace, media / file, speed))
+                          for _, file, trace in drawn], _import_replays)
+    for (tid, file, _), problem in zip(drawn, problems, strict=True):
         if problem:
             page.replay_notes[tid] = problem
         else:
             page.replays[tid] = file
             written.add(file)
+
+
+def _import_replays() -> None:
+    import cramlite.trace.replay  # noqa: F401
 
 
 def _tidy(media: Path, written: set[str]) -> None:

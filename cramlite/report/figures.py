@@ -25,7 +25,8 @@ FAILED = "#d62728"
 DPI = 100
 
 
-def _pyplot():
+def pyplot():
+    """matplotlib's pyplot on the Agg backend (imported on first use: it is slow)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -38,7 +39,7 @@ MAP_DPI = 125
 
 
 def _save(fig: Any, path: Path, dpi: int = DPI) -> Path:
-    plt = _pyplot()
+    plt = pyplot()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=dpi, metadata={"Software": None})
     plt.close(fig)
@@ -61,7 +62,7 @@ def setup_map_figure(layout: Layout, rows: Sequence[dict[str, Any]],
     """The figure `setup_map` saves (its text placed for the dpi it is saved at)."""
     from matplotlib.lines import Line2D
 
-    plt = _pyplot()
+    plt = pyplot()
     columns = min(2, max(1, len(strategies)))
     lines = math.ceil(len(strategies) / columns) or 1
     fig, axes = plt.subplots(lines, columns, figsize=(5.2 * columns, 5.3 * lines + 0.6),
@@ -250,7 +251,7 @@ def timeline_figure(row: dict[str, Any]) -> Any:
     """The figure `timeline` saves."""
     from matplotlib.patches import Patch
 
-    plt = _pyplot()
+    plt = pyplot()
     items = bars(row.get("actions") or [])
     depths = sorted({b.depth for b in items}) or [0]
     end = max((b.end for b in items), default=1.0) or 1.0
