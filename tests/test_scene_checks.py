@@ -122,6 +122,32 @@ def test_oriented_boxes_are_apart_only_where_coal_finds_them_apart() -> None:
         assert apart[clearly].mean() > 0.9
 
 
+def _touch(robot, grips, arms, ignore, self_collision, p, o) -> bool:
+    """The rule for a part and an obstacle, one pair at a time."""
+    if o.owner in ignore and o.kind in ("kitchen", "item"):
+        return False
+    if o.kind in ("robot", "held") and not self_collision:
+        return False
+    if o.kind == "robot":
+        return (robot.may_collide(p.robot_link, o.owner) if p.robot_link
+                else o.owner not in grips[p.held_arm])
+    if o.kind == "held":
+        return p.robot_link is None or p.robot_link not in grips[arms[o.owner]]
+    return True
+
+
+def _meet(robot, grips, self_collision, a, b) -> bool:
+    """The rule for two moving parts, one pair at a time."""
+    if a.moving_joints == b.moving_joints or not self_collision:
+        return False
+    if a.robot_link and b.robot_link:
+        return robot.may_collide(a.robot_link, b.robot_link)
+    if a.robot_link is None and b.robot_link is None:
+        return True
+    item, link = (a, b) if a.robot_link is None else (b, a)
+    return link.robot_link not in grips[item.held_arm]
+
+
 def test_a_layouts_pairs_follow_the_rules_pair_by_pair() -> None:
     """The checked part-obstacle and part-part pairs of a motion's layout, worked out as
     matrices, are those the rules give one pair at a time: robot links by the SRDF and
@@ -131,7 +157,7 @@ def test_a_layouts_pairs_follow_the_rules_pair_by_pair() -> None:
 
     scene = PlanningScene(load_setup("c1"))
     collisions = SceneCollisions(scene)
-    robot = scene.robot
+    robot, grips = scene.robot, collisions.gripper_links
     cup = HeldObject("cup", "right", np.eye(4))
     queries = [(arm_joint_names("right"), [], frozenset(), True),
                (arm_joint_names("left"), [cup], frozenset({"bowl", "drawer_1"}), True),
@@ -139,35 +165,13 @@ def test_a_layouts_pairs_follow_the_rules_pair_by_pair() -> None:
                (arm_joint_names("right"), [cup], frozenset({"cup"}), False)]
     for joints, held, ignore, self_collision in queries:
         layout = collisions.layout(joints, held, ignore, self_collision)
-        grips = collisions.gripper_links
         arms = {h.name: h.arm for h in held}
-
-        def touch(p, o):
-            if o.owner in ignore and o.kind in ("kitchen", "item"):
-                return False
-            if o.kind in ("robot", "held") and not self_collision:
-                return False
-            if o.kind == "robot":
-                return (robot.may_collide(p.robot_link, o.owner) if p.robot_link
-                        else o.owner not in grips[p.held_arm])
-            if o.kind == "held":
-                return p.robot_link is None or p.robot_link not in grips[arms[o.owner]]
-            return True
-
-        def meet(a, b):
-            if a.moving_joints == b.moving_joints or not self_collision:
-                return False
-            if a.robot_link and b.robot_link:
-                return robot.may_collide(a.robot_link, b.robot_link)
-            if a.robot_link is None and b.robot_link is None:
-                return True
-            item, link = (a, b) if a.robot_link is None else (b, a)
-            return link.robot_link not in grips[item.held_arm]
-
-        expected = [[touch(p, o) for o in layout.obstacles] for p in layout.parts]
+        expected = [[_touch(robot, grips, arms, ignore, self_collision, p, o)
+                     for o in layout.obstacles] for p in layout.parts]
         assert layout.allowed.tolist() == expected
         parts = layout.parts
         assert layout.pairs.tolist() == [[i, j] for i in range(len(parts))
                                          for j in range(i + 1, len(parts))
-                                         if meet(parts[i], parts[j])]
+                                         if _meet(robot, grips, self_collision, parts[i],
+                                                  parts[j])]
         assert layout.allowed.any() and (len(layout.pairs) > 0) == self_collision
