@@ -128,7 +128,7 @@ def test_a_slower_machine_plans_the_same_arm_path(world) -> None:
                             np.random.default_rng(0))
         assert fast is not None and fast.planned
         checked = scene.checks
-        is_free, states_free = scene.is_free, scene.states_free
+        is_free, first_collision = scene.is_free, scene.first_collision
 
         def slow(q, margin_m=0.0):
             time.sleep(0.003)
@@ -136,9 +136,9 @@ def test_a_slower_machine_plans_the_same_arm_path(world) -> None:
 
         def slow_states(states, order=None, margin_m=0.0):  # (a motion's states at once)
             time.sleep(0.003 * len(states))
-            return states_free(states, order, margin_m)
+            return first_collision(states, order, margin_m)
 
-        scene.is_free, scene.states_free = slow, slow_states
+        scene.is_free, scene.first_collision = slow, slow_states
         begin = time.perf_counter()
         again = planner.plan(scene, np.array(BELOW_EDGE), np.array(OVER_TOP),
                              np.random.default_rng(0))

@@ -317,34 +317,32 @@ def test_pictures_that_cannot_be_written_are_one_line(bench_dir: Path, tmp_path)
     assert "Traceback" not in done.stderr and "cannot write the report's pictures" in lines[-1]
 
 
-def _pid_and(value: int) -> tuple[int, int]:
-    import os
-
-    return os.getpid(), value
-
-
 def test_pictures_are_drawn_on_several_processes_in_order() -> None:
     """The report's pictures are drawn on forked processes where there are several CPUs
-    (each result in its job's place), and here one by one while another thread runs."""
-    import os
-    import threading
-
-    from cramlite.report.build import _draw_all
-
-    jobs = [(_pid_and, (k,)) for k in range(12)]
-    results = _draw_all(jobs)
-    assert [v for _, v in results] == list(range(12))
-    if (os.cpu_count() or 1) > 1:
-        assert os.getpid() not in {pid for pid, _ in results}
-        assert len({pid for pid, _ in results}) > 1
+    (each result in its job's place), and one by one in a process that runs another
+    thread or has JAX loaded (a fresh interpreter each: this one may have either)."""
+    code = """
+import os, sys, threading
+from cramlite.report.build import _draw_all
+case = sys.argv[1]
+if case == "thread":
     stop = threading.Event()
-    other = threading.Thread(target=stop.wait)
-    other.start()
-    try:
-        assert {pid for pid, _ in _draw_all(jobs)} == {os.getpid()}
-    finally:
-        stop.set()
-        other.join()
+    threading.Thread(target=stop.wait, daemon=True).start()
+if case == "jax":
+    sys.modules.setdefault("jax", type(sys)("jax"))
+results = _draw_all([(os.getpid, ())] * 6 + [(abs, (-7,))])
+print(results[-1], len({pid for pid in results[:-1]}), os.getpid() in results)
+"""
+    import os
+
+    for case, many in (("plain", (os.cpu_count() or 1) > 1), ("thread", False),
+                       ("jax", False)):
+        done = subprocess.run([sys.executable, "-c", code, case], capture_output=True,
+                              text=True, cwd=ROOT, timeout=120)
+        assert done.returncode == 0, done.stderr
+        last, pids, here = done.stdout.split()
+        assert last == "7"  # (in its job's place)
+        assert (int(pids) > 1 and here == "False") if many else (pids, here) == ("1", "True")
 
 
 def test_pictures_drawn_at_once_are_those_drawn_one_by_one(bench_dir: Path, tmp_path) -> None:

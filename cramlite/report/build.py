@@ -150,13 +150,15 @@ def _draw_all(jobs: list[tuple[Callable[..., Any], tuple]],
               before: Callable[[], Any] | None = None) -> list[Any]:
     """Each job's result (`function(*arguments)`), in order. Drawn on a few forked
     processes when there are several CPUs and this process runs no other thread (a
-    fork copies what `before()` imports, once; a thread's locks could be copied held),
-    else here one after the other: the same pictures either way."""
+    fork copies what `before()` imports, once; a thread's locks could be copied held;
+    JAX, loaded for a learned strategy, runs threads of its own), else here one after
+    the other: the same pictures either way."""
     import multiprocessing
+    import sys
     import threading
 
     processes = min(os.cpu_count() or 1, MAX_DRAWING_PROCESSES, len(jobs))
-    if processes < 2 or threading.active_count() > 1 or \
+    if processes < 2 or threading.active_count() > 1 or "jax" in sys.modules or \
             "fork" not in multiprocessing.get_all_start_methods():
         return [function(*arguments) for function, arguments in jobs]
     from concurrent.futures import ProcessPoolExecutor

@@ -684,11 +684,18 @@ class MotionCheck:
         """Every state (rows of joint vectors) free (keeping `margin_m` further away): one
         broadphase for all of them, then exact checks of the states that need one, in
         `order` (default: as given), up to the first that collides."""
+        return self.first_collision(states, order, margin_m) is None
+
+    def first_collision(self, states: np.ndarray, order: Sequence[int] | None = None,
+                        margin_m: float = 0.0) -> int | None:
+        """`states_free`, telling where in `order` the first state that collides (or tips
+        an upright item) is: None if none does (how many states a check one by one in
+        that order would have made)."""
         states = np.asarray(states, dtype=float).reshape(-1, len(self.joints))
         self.checks += len(states)
         if not len(states) or not len(self.parts):
-            return True
-        return self._frames_free(self._link_frames(states), order, margin_m)
+            return None
+        return self._first_collision(self._link_frames(states), order, margin_m)
 
     def states_free_along(self, bases: np.ndarray, states: np.ndarray) -> bool:
         """`states_free` with the base at its own pose (x, y, yaw) in each state: a drive
@@ -709,15 +716,26 @@ class MotionCheck:
     def _frames_free(self, frames: np.ndarray, order: Sequence[int] | None,
                      margin: float = 0.0) -> bool:
         """The broadphase and exact checks of `states_free` on the links' world frames."""
-        if not self._kept_upright(frames):
-            return False
-        near, meets, boxes = self._near(frames, margin)
-        flagged = set(np.flatnonzero(near.any(axis=(1, 2)) | meets.any(axis=1)).tolist())
-        for i in (order if order is not None else range(len(frames))):
-            if i in flagged and not self._state_free(frames[i], near[i], meets[i], margin,
-                                                     tuple(b[i] for b in boxes)):
-                return False
-        return True
+        return self._first_collision(frames, order, margin) is None
+
+    def _first_collision(self, frames: np.ndarray, order: Sequence[int] | None,
+                         margin: float = 0.0) -> int | None:
+        """`first_collision` on the links' world frames: the states that tip an upright
+        item found at once, exact checks only before the first of them."""
+        order = range(len(frames)) if order is None else order
+        upright = self._upright_states(frames)
+        tipped = [] if upright is None else [pos for pos, i in enumerate(order)
+                                             if not upright[i]]
+        if tipped:
+            order = order[:tipped[0]]  # (the states before it, then that one)
+        if len(order):
+            ordered = frames if order == range(len(frames)) else frames[list(order)]
+            near, meets, boxes = self._near(ordered, margin)
+            for pos in np.flatnonzero(near.any(axis=(1, 2)) | meets.any(axis=1)).tolist():
+                if not self._state_free(ordered[pos], near[pos], meets[pos], margin,
+                                        tuple(b[pos] for b in boxes)):
+                    return pos
+        return tipped[0] if tipped else None
 
     def is_free(self, q: Sequence[float], margin_m: float = 0.0) -> bool:
         """No penetration beyond what is allowed (keeping `margin_m` further away) at
@@ -745,6 +763,16 @@ class MotionCheck:
             if np.any(frames[:, row, 2, :3] @ axis < cos_limit):
                 return False
         return True
+
+    def _upright_states(self, frames: np.ndarray) -> np.ndarray | None:
+        """Which states (S x L x 4 x 4) keep every upright held item within its tilt
+        (None: the motion moves none)."""
+        if not self._upright:
+            return None
+        kept = np.ones(len(frames), dtype=bool)
+        for row, axis, cos_limit, _ in self._upright:
+            kept &= frames[:, row, 2, :3] @ axis >= cos_limit
+        return kept
 
     def tilts(self, q: Sequence[float]) -> list[tuple[str, float]]:
         """(item, tilt in degrees) of every upright held item tilted beyond its limit at
