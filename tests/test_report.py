@@ -330,7 +330,11 @@ if case == "thread":
     threading.Thread(target=stop.wait, daemon=True).start()
 if case == "jax":
     sys.modules.setdefault("jax", type(sys)("jax"))
-results = _draw_all([(os.getpid, ())] * 6 + [(abs, (-7,))])
+import time
+def job():  # (long enough that the pool starts its second process: it starts them as needed)
+    time.sleep(0.3)
+    return os.getpid()
+results = _draw_all([(job, ())] * 6 + [(abs, (-7,))])
 print(results[-1], len({pid for pid in results[:-1]}), os.getpid() in results)
 """
     import os
