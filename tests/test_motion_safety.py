@@ -150,40 +150,61 @@ def test_a_slower_machine_plans_the_same_arm_path(world) -> None:
 
 def test_ompls_motions_checked_as_batches_get_the_answers_of_state_by_state_checks(
         world, monkeypatch) -> None:
-    """Each motion OMPL asks about is checked as one batch of its states: the answer is
-    the one its states checked one by one give (motions drawn about the island, half of
-    them colliding), and the planner plans the very path it plans with OMPL's own
+    """Each motion OMPL asks about is checked as one batch of its states: the answer, and
+    the work counted against the budget, are those of OMPL's own validator checking them
+    one by one (motions drawn about the island, many colliding; and holding a cup that
+    must stay upright), and the planner plans the very path it plans with OMPL's own
     state-by-state motion checks."""
     with simulated_robot(world, seed=5) as ctx:
         stand_beside_island(ctx, world)
-        scene = ctx.collisions.check(list(RIGHT_ARM))
         planner = ArmMotionPlanner(ctx.limits)
         steps = ctx.limits.max_steps(tuple(RIGHT_ARM))
+        every = planner.options.check_every_steps
         space = ob.RealVectorStateSpace(len(steps))
         bounds = ob.RealVectorBounds(len(steps))
         bounds.setLow(-1e3)
         bounds.setHigh(1e3)
         space.setBounds(bounds)
-        si = ob.SpaceInformation(space)
-        every = planner.options.check_every_steps
-        budget = CheckBudget(lambda state: True, 10**9)
-        segments = _SegmentChecks(si, scene, steps, every, 0.0, budget)
-        rng = np.random.default_rng(1)
         a, b = np.array(BELOW_EDGE), np.array(OVER_TOP)
+        tool = ctx.scene.link_matrices(["r_gripper_tool_frame"],
+                                       dict(zip(RIGHT_ARM, BELOW_EDGE, strict=True)))
+        upright = np.eye(4)  # (the cup upright with the arm at BELOW_EDGE)
+        upright[:3, :3] = tool["r_gripper_tool_frame"][:3, :3].T
+        upright[:3, 3] = (0.0, 0.0, -0.08)
+        cup = HeldObject("cup", "right", upright)
+        rng = np.random.default_rng(1)
         answers = []
-        for _ in range(40):
-            s1 = a + (b - a) * rng.uniform() + rng.normal(0, 0.1, len(a))
-            s2 = s1 + rng.normal(0, 0.3, len(a))
-            u, v = si.allocState(), si.allocState()
-            for i in range(len(a)):
-                u[i], v[i] = float(s1[i] / steps[i]), float(s2[i] / steps[i])
-            count = math.ceil(float(np.linalg.norm((s2 - s1) / steps)) / every)
-            one_by_one = all(scene.is_free(s1 + (s2 - s1) * j / count)
-                             for j in range(1, count + 1))
-            answers.append(one_by_one)
-            assert segments.checkMotion(u, v) == one_by_one
-        print("free motions", sum(answers), "of", len(answers))
-        assert 5 < sum(answers) < 35
+        for held in ([], [cup]):  # (the cup must stay upright: many motions tip it)
+            scene = ctx.collisions.check(list(RIGHT_ARM), held)
+            one_state = []  # OMPL's own validator, state by state, counted
+
+            def valid(state, scene=scene, one_state=one_state):
+                one_state.append(1)
+                return scene.is_free([state[i] * steps[i] for i in range(len(steps))])
+
+            si = ob.SpaceInformation(space)
+            si.setStateValidityChecker(valid)
+            si.setStateValidityCheckingResolution(every / space.getMaximumExtent())
+            si.setup()
+            budget = CheckBudget(lambda state: True, 10**9)
+            segments = _SegmentChecks(si, space, scene, steps, 0.0, budget)
+            for _ in range(150):
+                s1 = (a + (b - a) * rng.uniform() + rng.normal(0, 0.1, len(a)) if not held
+                      else a + rng.normal(0, 0.03, len(a)))
+                s2 = s1 + rng.normal(0, 0.3 if not held else 0.15, len(a))
+                u, v = si.allocState(), si.allocState()
+                for i in range(len(a)):
+                    u[i], v[i] = float(s1[i] / steps[i]), float(s2[i] / steps[i])
+                one_state.clear()
+                expected = si.checkMotion(u, v)  # (OMPL's discrete motion validator)
+                spent = budget.states
+                assert segments.checkMotion(u, v) == expected
+                assert budget.states - spent == len(one_state)  # the states it checked
+                answers.append(expected)
+        free, holding = sum(answers[:150]), sum(answers[150:])
+        print("free motions", free, "and holding the cup", holding, "of 150 each")
+        assert 20 < free < 130 and 20 < holding < 130
+        scene = ctx.collisions.check(list(RIGHT_ARM))
         batched = planner.plan(scene, a, b, np.random.default_rng(0))
         monkeypatch.setattr(arm_planner, "SEGMENT_PLANNERS", frozenset())
         by_state = planner.plan(scene, a, b, np.random.default_rng(0))

@@ -54,7 +54,8 @@ class ArmPlannerOptions:
 
 
 #: Planners that check motions only whole (OMPL's `checkMotion(s1, s2)`), so that
-#: `_SegmentChecks` can check each motion's states as one batch.
+#: `_SegmentChecks` can check each motion's states as one batch (not those that ask where
+#: a motion stops being valid, e.g. the KPIECE family or TRRT: its binding never says).
 SEGMENT_PLANNERS = frozenset({"RRTConnect"})
 
 
@@ -66,18 +67,20 @@ class _SegmentChecks(ob.MotionValidator):
     one, at about a third of the cost. The budget counts the states checked one by one
     would have been, up to the first that collides."""
 
-    def __init__(self, si: ob.SpaceInformation, scene: CollisionScene, steps: np.ndarray,
-                 every: float, margin: float, budget: CheckBudget):
+    def __init__(self, si: ob.SpaceInformation, space: ob.StateSpace, scene: CollisionScene,
+                 steps: np.ndarray, margin: float, budget: CheckBudget):
         super().__init__(si)
-        self._scene, self._steps, self._every = scene, steps, every
+        self._space, self._scene, self._steps = space, scene, steps
         self._margin, self._budget, self._n = margin, budget, len(steps)
 
     def checkMotion(self, s1, s2) -> bool:  # noqa: N802 (OMPL's name)
         n = self._n
         a = np.array([s1[i] for i in range(n)])
         b = np.array([s2[i] for i in range(n)])
-        count = max(1, math.ceil(float(np.linalg.norm(b - a)) / self._every))
-        states = (a + np.outer(np.arange(1, count + 1) / count, b - a)) * self._steps
+        count = max(1, int(self._space.validSegmentCount(s1, s2)))  # (OMPL's own count)
+        states = a + np.outer(np.arange(1, count + 1) / count, b - a)
+        states[-1] = b
+        states *= self._steps
         if self._scene.moves_upright_items:
             # (most motions tip the item at their end, checked first: alone, cheaply)
             self._budget.states += 1
@@ -86,7 +89,9 @@ class _SegmentChecks(ob.MotionValidator):
             states, count = states[:-1], count - 1
             if not count:
                 return True
-        order = [count - 1] + bisection_order(count - 1)
+            order = bisection_order(count)
+        else:
+            order = [count - 1] + bisection_order(count - 1)
         first = self._scene.first_collision(states, order, self._margin)
         # (the budget counts the states OMPL's own validator would have checked)
         self._budget.states += count if first is None else first + 1
@@ -200,7 +205,7 @@ class ArmMotionPlanner:
         si.setStateValidityChecker(budget)
         si.setStateValidityCheckingResolution(check_every / space.getMaximumExtent())
         if self.options.planner in SEGMENT_PLANNERS:
-            segments = _SegmentChecks(si, scene, steps, check_every, margin, budget)
+            segments = _SegmentChecks(si, space, scene, steps, margin, budget)
             si.setMotionValidator(segments)
         si.setup()
         s, g = si.allocState(), si.allocState()

@@ -149,26 +149,35 @@ MAX_DRAWING_PROCESSES = 4
 def _draw_all(jobs: list[tuple[Callable[..., Any], tuple]],
               before: Callable[[], Any] | None = None) -> list[Any]:
     """Each job's result (`function(*arguments)`), in order. Drawn on a few forked
-    processes when there are several CPUs and this process runs no other thread (a
-    fork copies what `before()` imports, once; a thread's locks could be copied held;
-    JAX, loaded for a learned strategy, runs threads of its own), else here one after
-    the other: the same pictures either way."""
+    processes on Linux when there are several CPUs and this process runs no other Python
+    thread (a fork copies what `before()` imports, once; a thread's locks could be copied
+    held; JAX, loaded for a learned strategy, runs threads of its own; macOS's system
+    libraries are not safe to fork), else here one after the other: the same pictures
+    either way. The first job that fails stops the rest and raises here."""
     import multiprocessing
     import sys
     import threading
+    import warnings
 
     processes = min(os.cpu_count() or 1, MAX_DRAWING_PROCESSES, len(jobs))
-    if processes < 2 or threading.active_count() > 1 or "jax" in sys.modules or \
-            "fork" not in multiprocessing.get_all_start_methods():
+    if processes < 2 or not sys.platform.startswith("linux") or \
+            threading.active_count() > 1 or "jax" in sys.modules:
         return [function(*arguments) for function, arguments in jobs]
     from concurrent.futures import ProcessPoolExecutor
 
     if before is not None:
         before()
-    context = multiprocessing.get_context("fork")
-    with ProcessPoolExecutor(processes, mp_context=context) as pool:
-        futures = [pool.submit(function, *arguments) for function, arguments in jobs]
+    pool = ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("fork"))
+    try:
+        with warnings.catch_warnings():
+            # (Python 3.12+ warns of any thread at a fork; numpy's BLAS keeps idle ones,
+            # which are safe to fork: they hold no lock a picture needs)
+            warnings.filterwarnings("ignore", message=".*use of fork\\(\\) may lead to "
+                                    "deadlocks", category=DeprecationWarning)
+            futures = [pool.submit(function, *arguments) for function, arguments in jobs]
         return [future.result() for future in futures]
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _replays(data: BenchFolder, page: PageData, media: Path, written: set[str],

@@ -178,7 +178,7 @@ class SceneCollisions:
                               for arm in ("right", "left")}
         self._hulls: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
         self._layouts: dict[tuple, _Layout] = {}
-        self._kitchen: dict[tuple, tuple[np.ndarray, np.ndarray, np.ndarray, dict]] = {}
+        self._kitchen: dict[tuple, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.request = coal.CollisionRequest()
         self._requests: dict[float, coal.CollisionRequest] = {}
         self._eroded: dict[tuple, coal.CollisionGeometry | None] = {}
@@ -475,7 +475,7 @@ class SceneCollisions:
         return np.argwhere(np.triu(meet, 1)).astype(int).reshape(-1, 2)
 
     def kitchen_block(self, world_joints: dict[str, float],
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The kitchen's shapes placed (K x 4 x 4) and their bounds, with the
         drawers and doors at `world_joints` (kept by their values)."""
         key = tuple(round(world_joints[n], 9) for n in self.scene.kitchen.joints)
@@ -721,15 +721,23 @@ class MotionCheck:
     def _first_collision(self, frames: np.ndarray, order: Sequence[int] | None,
                          margin: float = 0.0) -> int | None:
         """`first_collision` on the links' world frames: the states that tip an upright
-        item found at once, exact checks only before the first of them."""
-        order = range(len(frames)) if order is None else order
+        item found at once, exact checks only before the first of them. States `order`
+        leaves out are checked after those it names."""
+        n = len(frames)
+        if order is None:
+            order = list(range(n))
+        else:
+            order = [int(i) for i in order]
+            if len(order) != n or len(set(order)) != n:
+                named = set(order)
+                order += [i for i in range(n) if i not in named]
         upright = self._upright_states(frames)
         tipped = [] if upright is None else [pos for pos, i in enumerate(order)
                                              if not upright[i]]
         if tipped:
             order = order[:tipped[0]]  # (the states before it, then that one)
-        if len(order):
-            ordered = frames if order == range(len(frames)) else frames[list(order)]
+        if order:
+            ordered = frames if order == list(range(n)) else frames[order]
             near, meets, boxes = self._near(ordered, margin)
             for pos in np.flatnonzero(near.any(axis=(1, 2)) | meets.any(axis=1)).tolist():
                 if not self._state_free(ordered[pos], near[pos], meets[pos], margin,
