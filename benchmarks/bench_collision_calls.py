@@ -1,6 +1,7 @@
 """The planning scene's collision checks of one trial, replayed: every `is_free` and
-`states_free` call a c1 trial (kinematic backend) makes, timed again on the same checks
-(a fixed workload, to compare changes of the checker; medians of 5 replays).
+`first_collision` call (the batches: `states_free` and OMPL's motions ask it) a c1 trial
+(kinematic backend) makes, timed again on the same checks (a fixed workload, to compare
+changes of the checker; medians of 5 replays).
 
     python benchmarks/bench_collision_calls.py [--setup c1]
 """
@@ -22,30 +23,35 @@ def main() -> None:
     parser.add_argument("--setup", default="c1")
     args = parser.parse_args()
     calls: list[tuple] = []
-    is_free, states_free = collision.MotionCheck.is_free, collision.MotionCheck.states_free
+    check_class = collision.MotionCheck
+    is_free, first_collision = check_class.is_free, check_class.first_collision
 
     def spy_free(self, q, margin_m=0.0):
-        calls.append((is_free, self, np.array(q, dtype=float), margin_m))
+        calls.append((is_free, self, (np.array(q, dtype=float), margin_m)))
         return is_free(self, q, margin_m)
 
-    def spy_states(self, states, order=None):
-        calls.append((states_free, self, np.array(states, dtype=float), order))
-        return states_free(self, states, order)
+    def spy_batch(self, states, order=None, margin_m=0.0):
+        calls.append((first_collision, self, (np.array(states, dtype=float),
+                                              None if order is None else list(order),
+                                              margin_m)))
+        return first_collision(self, states, order, margin_m)
 
-    collision.MotionCheck.is_free, collision.MotionCheck.states_free = spy_free, spy_states
+    check_class.is_free, check_class.first_collision = spy_free, spy_batch
     with TrialRunner(args.setup, backend="kinematic") as runner:
         runner.run("opm", seed=0)
-    collision.MotionCheck.is_free, collision.MotionCheck.states_free = is_free, states_free
-    answers = [fn(check, a, b) for fn, check, a, b in calls]
+    check_class.is_free, check_class.first_collision = is_free, first_collision
+    answers = [fn(check, *arguments) for fn, check, arguments in calls]
     times = []
     for _ in range(5):
         start = time.perf_counter()
-        again = [fn(check, a, b) for fn, check, a, b in calls]
+        again = [fn(check, *arguments) for fn, check, arguments in calls]
         times.append(time.perf_counter() - start)
         assert again == answers
     singles = sum(fn is is_free for fn, *_ in calls)
-    print(f"{args.setup}: {singles} is_free and {len(calls) - singles} states_free calls, "
-          f"{sum(answers)} free: {statistics.median(times):.3f} s (median of 5)")
+    states = sum(len(arguments[0]) if fn is first_collision else 1
+                 for fn, _, arguments in calls)
+    print(f"{args.setup}: {singles} is_free and {len(calls) - singles} batch calls "
+          f"({states} states): {statistics.median(times):.3f} s (median of 5)")
 
 
 if __name__ == "__main__":
