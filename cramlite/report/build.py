@@ -91,7 +91,7 @@ def _have_matplotlib() -> bool:
 def _pictures(data: BenchFolder, page: PageData, media: Path, written: set[str],
               say: Callable[[str], None] | None) -> None:
     from cramlite.bench.plots import write_plots
-    from cramlite.report.figures import setup_map, timeline
+    from cramlite.report.figures import pyplot, setup_map, timeline
     from cramlite.world.topdown import load_layout
 
     captions = {"robot_time_s_by_setup.png": "Robot time per setup and strategy.",
@@ -125,8 +125,6 @@ def _pictures(data: BenchFolder, page: PageData, media: Path, written: set[str],
         say(f"report: drawing {len(page.interest)} timelines")
     for row in page.interest:
         jobs.append((timeline, (row, media / f"timeline-{trial_id(row)}.png")))
-    from cramlite.report.figures import pyplot
-
     results = _draw_all(jobs, pyplot)
     for path in results[0]:
         written.add(path.name)

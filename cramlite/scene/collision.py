@@ -132,9 +132,6 @@ class _Layout:
     item_index: np.ndarray
     item_names: tuple[str, ...]
     others: np.ndarray
-    #: the local bounds' centres and half sizes of those others
-    others_centres: np.ndarray
-    others_halves: np.ndarray
     #: every obstacle's local bounds: centre and half sizes (O x 3, shape frame)
     centres: np.ndarray
     halves: np.ndarray
@@ -354,8 +351,6 @@ class SceneCollisions:
                        index([item_names.index(obstacles[k].owner) for k in item_ob],
                              dtype=int),
                        item_names, index(others, dtype=int),
-                       np.array([obstacles[k].shape.centre for k in others]).reshape(-1, 3),
-                       np.array([obstacles[k].shape.half for k in others]).reshape(-1, 3),
                        np.array([o.shape.centre for o in obstacles]).reshape(-1, 3),
                        np.array([o.shape.half for o in obstacles]).reshape(-1, 3))
 
@@ -560,8 +555,8 @@ class MotionCheck:
         lo, hi = np.empty((len(self.obstacles), 3)), np.empty((len(self.obstacles), 3))
         lo[layout.kitchen], hi[layout.kitchen] = kitchen_lo, kitchen_hi
         if others:
-            lo[others], hi[others] = _placed_bounds(layout.others_centres,
-                                                    layout.others_halves, placements[others])
+            lo[others], hi[others] = _placed_bounds(layout.centres[others],
+                                                    layout.halves[others], placements[others])
         self._placements, self._lo, self._hi = placements, lo, hi
         self._lo_list, self._hi_list = lo.tolist(), hi.tolist()
         self._lo_t, self._hi_t = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
@@ -767,10 +762,8 @@ class MotionCheck:
 
     def _kept_upright(self, frames: np.ndarray) -> bool:
         """Every upright held item within its tilt at every state (S x L x 4 x 4)."""
-        for row, axis, cos_limit, _ in self._upright:
-            if np.any(frames[:, row, 2, :3] @ axis < cos_limit):
-                return False
-        return True
+        kept = self._upright_states(frames)
+        return kept is None or bool(kept.all())
 
     def _upright_states(self, frames: np.ndarray) -> np.ndarray | None:
         """Which states (S x L x 4 x 4) keep every upright held item within its tilt
