@@ -163,7 +163,7 @@ class CostmapLocation:
         ik_checks, passed = 0, 0
         detours = []
         for _, base, arm, grasp in self.candidates(ctx):
-            if self.tool_at(base, arm, grasp) is None:  # (cheap: before the footprint)
+            if self.yaws_at(base, arm, grasp) is None:  # (cheap: before the footprint)
                 self.rejected["grasp yaw"] += 1
                 continue
             if not ctx.base_checker().is_free(*base):
@@ -262,15 +262,26 @@ class CostmapLocation:
                 ) -> tuple[pin.SE3, float, float] | None:
         """The tool pose at the grasp (or place) from this base pose, its yaw and the
         item's yaw; None if the grasp needs a tool yaw too far off the robot's heading."""
+        yaws = self.yaws_at(base, arm, grasp)
+        if yaws is None:
+            return None
+        tool_yaw, item_yaw = yaws
+        if self.purpose == PICK:
+            return tool_pose(grasp, self.point, tool_yaw), tool_yaw, item_yaw
+        item = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, item_yaw), np.asarray(self.point, float))
+        return tool_for_item(item, self.relative), tool_yaw, item_yaw
+
+    def yaws_at(self, base: BasePose, arm: str, grasp: Grasp) -> tuple[float, float] | None:
+        """The tool's and the item's yaw at the grasp (or place) from this base pose; None
+        if the grasp needs a tool yaw too far off the robot's heading (`tool_at` without
+        the pose: candidates are screened with it)."""
         heading = base[2]
         if grasp.kind == "rim":  # the rim point on the arm's side of the item
             heading += math.pi if arm == "right" else 0.0
         if self.purpose == PICK:
             item_yaw = quat_yaw(self.orientation)
             tool_yaw = grasp.tool_yaw(item_yaw, heading)
-            if tool_yaw is None:
-                return None
-            return tool_pose(grasp, self.point, tool_yaw), tool_yaw, item_yaw
+            return None if tool_yaw is None else (tool_yaw, item_yaw)
         held_yaw = held_item_yaw(self.relative, grasp.kind)  # the item's yaw off the tool's
         if self.target_yaw is None:  # (any yaw will do)
             tool_yaw = heading
@@ -278,9 +289,7 @@ class CostmapLocation:
             tool_yaw = grasp.place_yaw(self.target_yaw, held_yaw, heading, self.symmetry_deg)
             if tool_yaw is None:
                 return None
-        item_yaw = tool_yaw + held_yaw
-        item = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, item_yaw), np.asarray(self.point, float))
-        return tool_for_item(item, self.relative), tool_yaw, item_yaw
+        return tool_yaw, tool_yaw + held_yaw
 
     def _solve(self, ctx: RobotContext, arm: str, grasp: str, base: BasePose,
                torso: float | None, poses: dict[str, tuple[pin.SE3, bool]],
