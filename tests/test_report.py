@@ -371,3 +371,22 @@ def test_pictures_drawn_at_once_are_those_drawn_one_by_one(bench_dir: Path, tmp_
     drawn = {p.name: p.read_bytes() for p in (together / "report").iterdir()}
     assert any(name.endswith(".gif") for name in drawn) and len(drawn) > 5
     assert {p.name: p.read_bytes() for p in (apart / "report").iterdir()} == drawn
+
+
+def test_the_plots_drawn_for_the_report_are_copied_where_asked(bench_dir: Path,
+                                                               tmp_path) -> None:
+    """`cramlite bench` no longer draws its plots itself: the report draws them (with its
+    other pictures) and copies them into the bench's folder, the same bytes."""
+    from cramlite.bench.plots import write_plots
+    from cramlite.report import build_report
+
+    folder = tmp_path / "results"
+    shutil.copytree(bench_dir, folder, ignore=shutil.ignore_patterns("report*"))
+    build_report(folder, max_replays=0, plots_to=folder)
+    copied = sorted(p.name for p in folder.glob("*.png"))
+    assert copied == ["base_path_m_aggregated.png", "base_path_m_by_setup.png",
+                      "robot_time_s_aggregated.png", "robot_time_s_by_setup.png"]
+    alone = write_plots(rows(folder), tmp_path)  # (drawn here, one by one)
+    for path in alone:
+        assert (folder / path.name).read_bytes() == path.read_bytes()
+        assert (folder / "report" / path.name).read_bytes() == path.read_bytes()

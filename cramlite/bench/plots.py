@@ -9,6 +9,7 @@ box (quartiles), the line (median), the triangle (mean), the whiskers and the ci
 
 from __future__ import annotations
 
+import shutil
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -98,7 +99,10 @@ def _values(rows, setup, strategy, measure) -> list[float]:
     return out
 
 
-def write_plots(rows: Sequence[dict[str, Any]], folder: Path) -> list[Path]:
+def write_plots(rows: Sequence[dict[str, Any]], folder: Path,
+                also_to: Path | None = None) -> list[Path]:
+    """The bench's plots (PNG) in `folder`, and copies in `also_to` if given (the report
+    draws them for its page and for the bench's folder at once); the paths in `folder`."""
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -159,6 +163,9 @@ def write_plots(rows: Sequence[dict[str, Any]], folder: Path) -> list[Path]:
             ax.legend(loc="best", fontsize=7)
         axes[0][0].set_ylabel("orders")
         written.append(_save(fig, folder / "all_orders_base_path.png"))
+    if also_to is not None:
+        for path in written:
+            shutil.copyfile(path, also_to / path.name)
     return written
 
 

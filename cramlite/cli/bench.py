@@ -278,23 +278,24 @@ def _run(args, strategies, setups, workers, out) -> int:
 
     text = write_summary(out, summary, tests, order_percentiles(rows) if args.all_orders else [],
                          backend_agreement(rows), injection_counts(rows), carry_savings(rows))
-    from cramlite.bench.plots import write_plots
-
-    plots = [] if args.no_plots else write_plots(rows, out)
     failed = [r for r in rows if str(r["success"]) != "True"]
     if failed:
         progress.say(f"{len(failed)} of {len(rows)} trials failed (see the error and "
                      "failures columns)")
     print(text)
-    print(f"wrote {store.path}, {out / 'summary.csv'}, {out / 'summary.md'}"
-          + (f", {len(plots)} plots" if plots else
-             ("" if args.no_plots else " (no plots: pip install cramlite[plots])")))
     from cramlite.report import build_report
-    from cramlite.report.build import DEFAULT_MAX_REPLAYS
+    from cramlite.report.build import DEFAULT_MAX_REPLAYS, have_matplotlib
 
+    plots = not args.no_plots and have_matplotlib()
+    print(f"wrote {store.path}, {out / 'summary.csv'}, {out / 'summary.md'}"
+          + (", the plots with the report's pictures" if plots else
+             ("" if args.no_plots else " (no plots: pip install cramlite[plots])")),
+          flush=True)
+    # (the report draws the plots, on several processes with its other pictures, and
+    # puts copies in the bench's folder)
     page = build_report(out, figures=not args.no_plots, running=False,
                         max_replays=0 if args.no_plots else DEFAULT_MAX_REPLAYS,
-                        say=progress.say)
+                        say=progress.say, plots_to=out if plots else None)
     print(f"report: {page.resolve()}", flush=True)
     return EXIT_OK if not failed else EXIT_PLAN_FAILED
 

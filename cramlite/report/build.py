@@ -24,11 +24,13 @@ NO_MATPLOTLIB = "Pictures (plots, maps, timelines) need matplotlib: pip install 
 def build_report(folder: str | Path, *, figures: bool = True,
                  max_replays: int = DEFAULT_MAX_REPLAYS, speed: float | None = None,
                  running: bool | None = None,
-                 say: Callable[[str], None] | None = None) -> Path:
+                 say: Callable[[str], None] | None = None,
+                 plots_to: Path | None = None) -> Path:
     """Write DIR/report.html (and its pictures in DIR/report/); returns the page's path.
     `figures`: draw pictures (needs matplotlib); `max_replays`: at most this many replay
     GIFs of traced trials; `running`: whether a bench is still filling the folder (None:
-    ask its lock)."""
+    ask its lock); `plots_to`: put copies of the plots there too (the bench's folder: they
+    are drawn once)."""
     from cramlite.bench.plots import strategy_colours
     from cramlite.bench.summary import order_percentiles, reference_tests, summarise
     from cramlite.report.replays import DEFAULT_SPEED
@@ -58,11 +60,11 @@ def build_report(folder: str | Path, *, figures: bool = True,
     if not figures:
         page.figures_note = ("Pictures skipped (--no-plots); `cramlite report DIR` draws "
                              "them.")
-    elif not _have_matplotlib():
+    elif not have_matplotlib():
         page.figures_note = NO_MATPLOTLIB
     try:
-        if figures and _have_matplotlib():
-            _pictures(data, page, media, written, say)
+        if figures and have_matplotlib():
+            _pictures(data, page, media, written, say, plots_to)
         if max_replays > 0:
             _replays(data, page, media, written, max_replays, speed or DEFAULT_SPEED, say)
         _tidy(media, written)
@@ -80,7 +82,7 @@ def build_report(folder: str | Path, *, figures: bool = True,
     return out
 
 
-def _have_matplotlib() -> bool:
+def have_matplotlib() -> bool:
     try:
         import matplotlib  # noqa: F401
     except ImportError:
@@ -89,7 +91,7 @@ def _have_matplotlib() -> bool:
 
 
 def _pictures(data: BenchFolder, page: PageData, media: Path, written: set[str],
-              say: Callable[[str], None] | None) -> None:
+              say: Callable[[str], None] | None, plots_to: Path | None = None) -> None:
     from cramlite.bench.plots import write_plots
     from cramlite.report.figures import pyplot, setup_map, timeline
     from cramlite.world.topdown import load_layout
@@ -100,7 +102,7 @@ def _pictures(data: BenchFolder, page: PageData, media: Path, written: set[str],
                 "base_path_m_aggregated.png": "Driven base path, all setups together."}
     # every picture is drawn on its own (the plots, a map per setup, a timeline per trial
     # of interest): on a few processes at once where that is safe (`_draw_all`)
-    jobs: list[tuple[Callable[..., Any], tuple]] = [(write_plots, (data.rows, media))]
+    jobs: list[tuple[Callable[..., Any], tuple]] = [(write_plots, (data.rows, media, plots_to))]
     maps: list[tuple[str, str]] = []
     for name in data.setup_names:
         setup = data.setups[name]
