@@ -288,7 +288,7 @@ def _run(args, strategies, setups, workers, out) -> int:
 
     plots = not args.no_plots and have_matplotlib()
     print(f"wrote {store.path}, {out / 'summary.csv'}, {out / 'summary.md'}"
-          + (", the plots with the report's pictures" if plots else
+          + ("; the plots and the report next" if plots else
              ("" if args.no_plots else " (no plots: pip install cramlite[plots])")),
           flush=True)
     # (the report draws the plots, on several processes with its other pictures, and
