@@ -706,12 +706,7 @@ class MotionCheck:
         finally:
             self.base_matrix = saved
         worlds = planar_many(bases)
-        return self._frames_free(worlds[:, None] @ local, None)
-
-    def _frames_free(self, frames: np.ndarray, order: Sequence[int] | None,
-                     margin: float = 0.0) -> bool:
-        """The broadphase and exact checks of `states_free` on the links' world frames."""
-        return self._first_collision(frames, order, margin) is None
+        return self._first_collision(worlds[:, None] @ local, None) is None
 
     def _first_collision(self, frames: np.ndarray, order: Sequence[int] | None,
                          margin: float = 0.0) -> int | None:
