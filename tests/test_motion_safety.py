@@ -116,6 +116,47 @@ def test_ompl_plans_a_joint_space_path_around_the_island(world) -> None:
         assert again.vertices == pytest.approx(path.vertices)
 
 
+class RecordsSearches(ArmMotionPlanner):
+    """Records each OMPL search's margin and whether it returned a path; `colliding_first`:
+    the first search returns the straight path (which collides), as a coarse search's
+    path that fails the dense check would."""
+
+    def __init__(self, limits, options=None, colliding_first: bool = False):
+        super().__init__(limits, options)
+        self.searches: list[tuple[float, bool]] = []
+        self.colliding_first = colliding_first
+
+    def _ompl(self, scene, start, goal, steps, seed, check_every, margin):
+        if self.colliding_first and not self.searches:
+            vertices = np.vstack([start, goal])
+        else:
+            vertices = super()._ompl(scene, start, goal, steps, seed, check_every, margin)
+        self.searches.append((margin, vertices is not None))
+        return vertices
+
+
+def test_a_search_that_found_no_path_is_not_repeated_finely(world, monkeypatch) -> None:
+    """The first search (coarse, with a margin) spent its budget and found nothing: the
+    same budget checking every step explores a quarter as far, so no second search is made
+    (over c1-c3 none found a path, each spent 1.6-1.7 s). A coarse path that fails the
+    dense check is still planned again finely."""
+    # (the hand below the island's edge is within 3 mm of it: a smaller margin, so that
+    # the coarse search is made at all)
+    monkeypatch.setattr(arm_planner, "PLANNING_MARGIN_M", 0.001)
+    with simulated_robot(world, seed=5) as ctx:
+        stand_beside_island(ctx, world)
+        scene = ctx.collisions.check(list(RIGHT_ARM))
+        starved = RecordsSearches(ctx.limits, arm_planner.ArmPlannerOptions(max_work=40))
+        assert starved.plan(scene, np.array(BELOW_EDGE), np.array(OVER_TOP),
+                            np.random.default_rng(0)) is None
+        assert starved.searches == [(arm_planner.PLANNING_MARGIN_M, False)]
+        replanned = RecordsSearches(ctx.limits, colliding_first=True)
+        path = replanned.plan(scene, np.array(BELOW_EDGE), np.array(OVER_TOP),
+                              np.random.default_rng(0))
+        assert replanned.searches == [(arm_planner.PLANNING_MARGIN_M, True), (0.0, True)]
+        assert path is not None and path.planned
+
+
 def test_a_slower_machine_plans_the_same_arm_path(world) -> None:
     """OMPL's search is bounded by the work of its checks, not by the host's clock: every
     state's check made 3 ms slower (a loaded machine), the same seed plans the same path
