@@ -215,3 +215,60 @@ def test_the_audits_self_collisions_are_found_by_both_checks(trace: str, what: s
     contacts = check.contacts(q)
     print([c.describe() for c in contacts])
     assert any({c.what, c.other} == {what, other} for c in contacts)
+
+
+def test_a_handles_whole_path_is_checked_as_one_batch_with_the_container_moving() -> None:
+    """`states_free_as_joint_moves` answers as `move_world_joint` then `is_free` state by
+    state would: each state's obstacles are the kitchen with the drawer or door where it
+    is then (and what lies in a drawer riding along), not where the check stands."""
+    from cramlite.designators.motions import gripper_joints
+    from cramlite.designators.storage import AccessingLocation, handle_width
+    from cramlite.scene.gripper import gripper_geometry
+
+    with simulated_robot(load_setup("c1")) as ctx:
+        ParkArmsAction().perform(ctx)
+        scene = ctx.scene
+        drawer = next(c for c in scene.containers.values() if scene.riding_along(c.joint))
+        door = next(c for c in scene.containers.values() if c.kind != "drawer")
+        assert not scene.riding_along(door.joint)
+        rng = np.random.default_rng(3)
+        for container in (drawer, door):
+            end = container.open_value / (3 if container is door else 1)
+            access = next(AccessingLocation(container, 0.0, end).ground(ctx))
+            closed = gripper_geometry().closing_angle(handle_width(scene, container))
+
+            def check(access=access, container=container, closed=closed):
+                return ctx.collisions.check(
+                    list(access.names), ignore=(container.handle,), base=access.base,
+                    fixed=gripper_joints(access.arm, "close", closed))
+
+            batch, values, states = check(), access.values, access.states
+            # each state's world as move_world_joint makes it, items riding along
+            moving = batch._obstacles_by_state(container.joint, values)
+            one = check()
+            for i in (0, len(values) // 2, len(values) - 1):
+                one.move_world_joint(container.joint, float(values[i]))
+                np.testing.assert_array_equal(moving.placements[i], one._placements)
+                np.testing.assert_array_equal(moving.lo[i], one._lo)
+            # free along the handle only with the container moving along
+            assert batch.states_free_as_joint_moves(container.joint, values, states)
+            opened = check()
+            opened.move_world_joint(container.joint, float(values[-1]))
+            assert not opened.states_free(states)  # (the hand in it where it was closed)
+            assert not batch.states_free_as_joint_moves(container.joint, values[::-1], states)
+            # and the same answers as state by state on states pushed off the path
+            answers = set()
+            for scale in (0.01, 0.03, 0.1, 0.3):
+                pushed = states + rng.normal(0.0, scale, states.shape)
+                alone = check()
+                expected = True
+                for q, value in zip(pushed, values, strict=True):
+                    alone.move_world_joint(container.joint, float(value))
+                    if not alone.is_free(q):
+                        expected = False
+                        break
+                assert batch.states_free_as_joint_moves(container.joint, values,
+                                                        pushed) == expected
+                answers.add(expected)
+            print(container.name, answers)
+            assert False in answers

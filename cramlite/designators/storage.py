@@ -245,16 +245,15 @@ class AccessingLocation:
         checks = {gripper: ctx.collisions.check(names, ignore=(container.handle,), base=base,
                                                 fixed=gripper_joints(arm, gripper, closed))
                   for gripper in ("open", "close")}
-        stages = [(pre, self.start, "open")]
-        stages += [(dict(zip(names, q, strict=True)), float(v), "close")
-                   for q, v in zip(states, values, strict=True)]
-        stages.append((post, self.end, "open"))
-        for joints, value, gripper in stages:
-            check = checks[gripper]
-            check.move_world_joint(container.joint, value)  # (items inside ride along)
-            if not check.is_free(np.array([joints[n] for n in names])):
-                return False
-        return True
+        opened = checks["open"]
+        opened.move_world_joint(container.joint, self.start)  # (items inside ride along)
+        if not opened.is_free(np.array([pre[n] for n in names])):
+            return False
+        # (the states along the handle as one batch, each with the container where it is)
+        if not checks["close"].states_free_as_joint_moves(container.joint, values, states):
+            return False
+        opened.move_world_joint(container.joint, self.end)
+        return opened.is_free(np.array([post[n] for n in names]))
 
     def describe_rejections(self) -> str:
         total = sum(self.rejected.values())

@@ -137,6 +137,21 @@ class _Layout:
     halves: np.ndarray
 
 
+@dataclass(frozen=True)
+class _ObstaclesByState:
+    """The obstacles at each of S states where a drawer or door moves along them (what
+    it carries riding along): placements (S x O x 4 x 4), axis-aligned bounds (S x O x 3,
+    and laid out 3 x S x O for the broadphase) and oriented boxes' axes and centres."""
+
+    placements: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    lo_t: np.ndarray
+    hi_t: np.ndarray
+    box_axes: np.ndarray
+    box_centres: np.ndarray
+
+
 def _transform(matrix: np.ndarray) -> coal.Transform3s:
     return coal.Transform3s(np.ascontiguousarray(matrix[:3, :3]),
                             np.ascontiguousarray(matrix[:3, 3]))
@@ -588,6 +603,76 @@ class MotionCheck:
             self._world_joints = dict(scene.belief.world_joints)
         self._place_obstacles()
 
+    def states_free_as_joint_moves(self, joint: str, values: Sequence[float],
+                                   states: np.ndarray) -> bool:
+        """Every state free with the drawer or door `joint` at its own value in each (what
+        it carries riding along): the answer of `move_world_joint(joint, values[i])` then
+        `is_free(states[i])` for every i, as one batch (the links' frames and the
+        broadphase of all the states at once; a handle's whole path is checked so). The
+        check's own world is left as it was."""
+        states = np.asarray(states, dtype=float).reshape(-1, len(self.joints))
+        self.checks += len(states)
+        if not len(states) or not len(self.parts):
+            return True
+        frames = self._link_frames(states)
+        if not self._kept_upright(frames):
+            return False
+        moving = self._obstacles_by_state(joint, values)
+        near, meets, boxes = self._near(frames, 0.0, moving)
+        saved = (self._placements, self._lo_list, self._hi_list, self._obstacle_refs_list,
+                 self._transforms)
+        refs = self.layout.refs[:, :, None]
+        try:
+            for i in np.flatnonzero(near.any(axis=(1, 2)) | meets.any(axis=1)).tolist():
+                placements = moving.placements[i]  # (that state's world, for the exact tests)
+                self._placements, self._transforms = placements, {}
+                self._lo_list, self._hi_list = moving.lo[i].tolist(), moving.hi[i].tolist()
+                self._obstacle_refs_list = ((placements[:, :3, :3] @ refs)[:, :, 0]
+                                            + placements[:, :3, 3]).tolist()
+                if not self._state_free(frames[i], near[i], meets[i], 0.0,
+                                        tuple(b[i] for b in boxes)):
+                    return False
+            return True
+        finally:
+            (self._placements, self._lo_list, self._hi_list, self._obstacle_refs_list,
+             self._transforms) = saved
+
+    def _obstacles_by_state(self, joint: str, values: Sequence[float]) -> _ObstaclesByState:
+        """The obstacles with `joint` at each of `values`, as `move_world_joint` places
+        them: the kitchen as its drawers and doors then stand, the items as they then lie
+        (only those in a drawer that moves ride along); the robot's own links and the
+        other hand's item do not move with it."""
+        layout, scene = self.layout, self.scene
+        count = len(values)
+        placements = np.repeat(self._placements[None], count, axis=0)
+        lo, hi = np.repeat(self._lo[None], count, axis=0), np.repeat(self._hi[None], count, axis=0)
+        items = layout.item_obstacles
+        carried = bool(len(items)) and bool(scene.riding_along(joint))
+        if len(items) and not carried:  # (the items lie as believed now, in every state)
+            poses = np.array([scene.item_matrix(name) for name in layout.item_names])
+            placements[:, items] = poses[layout.item_index] @ layout.in_link[items]
+            lo[:, items], hi[:, items] = _placed_bounds(layout.centres[items],
+                                                        layout.halves[items], placements[0, items])
+        for i, value in enumerate(values):
+            if carried:
+                with scene.world_joint_at(joint, float(value), carry=True):
+                    placed, kitchen_lo, kitchen_hi = self.owner.kitchen_block(
+                        dict(scene.belief.world_joints))
+                    poses = np.array([scene.item_matrix(name) for name in layout.item_names])
+                placements[i, items] = poses[layout.item_index] @ layout.in_link[items]
+                lo[i, items], hi[i, items] = _placed_bounds(layout.centres[items],
+                                                            layout.halves[items],
+                                                            placements[i, items])
+            else:
+                placed, kitchen_lo, kitchen_hi = self.owner.kitchen_block(
+                    {**scene.belief.world_joints, joint: float(value)})
+            placements[i, layout.kitchen] = placed
+            lo[i, layout.kitchen], hi[i, layout.kitchen] = kitchen_lo, kitchen_hi
+        axes = placements[..., :3, :3]
+        centres = (axes @ layout.centres[None, :, :, None])[..., 0] + placements[..., :3, 3]
+        return _ObstaclesByState(placements, lo, hi, np.ascontiguousarray(lo.transpose(2, 0, 1)),
+                                 np.ascontiguousarray(hi.transpose(2, 0, 1)), axes, centres)
+
     # -- states ---------------------------------------------------------------------------
     def _link_frames(self, states: np.ndarray) -> np.ndarray:
         """World frames (S x L x 4 x 4) of the links carrying the parts."""
@@ -595,13 +680,14 @@ class MotionCheck:
                                         self.layout.links)
 
     def _near(self, frames: np.ndarray, margin: float = 0.0,
-              ) -> tuple[np.ndarray, np.ndarray]:
+              moving: _ObstaclesByState | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Broadphase for S states: (S x parts x obstacles) parts whose bounds meet an
         obstacle's, and (S x pairs) moving parts whose bounds meet; and the boxes (S x P x 3
         centres and half spans, axis-aligned) and the points `enclosed` tests (S x P x 3),
         for `_nested_test`. Bounds are first compared axis-aligned (each part's over all
         the states, then state by state), then the pairs that meet so as oriented boxes
-        (most of them turn out apart: a narrow test each saved)."""
+        (most of them turn out apart: a narrow test each saved). `moving`: each state's own
+        obstacle bounds (a drawer or door that moves along the states)."""
         s = len(frames)
         placed = frames[:, self._rows]  # S x P x 4 x 4
         rotations = placed[..., :3, :3]
@@ -616,6 +702,9 @@ class MotionCheck:
         # several times faster than a trailing one)
         c_t, s_t = centres.transpose(2, 0, 1), spans.transpose(2, 0, 1)  # 3 x S x P
         lo_t, hi_t = self._lo_t, self._hi_t  # 3 x O
+        box_axes, box_centres = self._box_axes, self._box_centres  # O x 3 x 3, O x 3
+        if moving is not None:  # (the first pass against the bounds over all the states)
+            lo_t, hi_t = moving.lo_t.min(axis=1), moving.hi_t.max(axis=1)
         if len(self.obstacles) and len(self.parts):
             # each part's bounds over all the states first: the obstacles each part can
             # meet at all (few), then those pairs state by state
@@ -631,12 +720,18 @@ class MotionCheck:
                     state = np.zeros(len(p), dtype=int)
                 else:
                     c, h = c_t[:, :, p], s_t[:, :, p]  # 3 x S x M
-                    state, m = np.nonzero(((lo_t[:, None, k] <= c + h) &
-                                           (hi_t[:, None, k] >= c - h)).all(axis=0))
+                    if moving is None:
+                        low_k, high_k = lo_t[:, None, k], hi_t[:, None, k]
+                    else:
+                        low_k, high_k = moving.lo_t[:, :, k], moving.hi_t[:, :, k]
+                    state, m = np.nonzero(((low_k <= c + h) & (high_k >= c - h)).all(axis=0))
                     p, k = p[m], k[m]
+                if moving is None:
+                    k_axes, k_centres = box_axes[k], box_centres[k]
+                else:
+                    k_axes, k_centres = moving.box_axes[state, k], moving.box_centres[state, k]
                 close = ~boxes_apart(axes[state, p], centres[state, p], self._halves[p],
-                                     self._box_axes[k], self._box_centres[k],
-                                     self.layout.halves[k], gap)
+                                     k_axes, k_centres, self.layout.halves[k], gap)
                 near[state[close], p[close], k[close]] = True
         meets = np.zeros((s, len(self._pairs)), dtype=bool)
         if len(self._pairs):

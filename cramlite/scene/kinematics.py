@@ -46,25 +46,28 @@ class BatchedFrames:
         and every other joint at `values` (by name, or Pinocchio's configuration), the
         model's root at `base` (4 x 4)."""
         states = np.asarray(states, dtype=float).reshape(len(states), len(joints))
-        riding, columns, placements = self._plan(tuple(links))
+        riding, columns, placements, moved = self._plan(tuple(links))
         q = values.copy() if isinstance(values, np.ndarray) else self.articulated.q(values)
         if len(states) < FEW_STATES or any(self._kind[self._joint_id[n]][0] == "other"
                                            for n in joints):
             out = self._each_state(base, q, joints, states, riding)
-        else:
-            out = self._all_states(base, q, joints, states, riding)
-        return out[:, columns] @ placements
+            return out[:, columns] @ placements
+        return self._all_states(base, q, joints, states, riding, moved)
 
-    def _plan(self, links: tuple[str, ...]) -> tuple[list[int], list[int], np.ndarray]:
+    def _plan(self, links: tuple[str, ...],
+              ) -> tuple[list[int], list[int], np.ndarray, list[tuple[int, np.ndarray | None]]]:
         """For a tuple of links: the joints they ride on, each link's column among them,
-        and each link's frame in its joint's frame (kept: a motion asks the same links)."""
+        each link's frame in its joint's frame, and per link (its joint, that frame or None
+        where it is the joint's own) (kept: a motion asks the same links)."""
         plan = self._plans.get(links)
         if plan is None:
             riding = sorted({self._link[link][0] for link in links})
             column = {j: k for k, j in enumerate(riding)}
+            moved = [(joint, None if np.array_equal(frame, np.eye(4)) else frame)
+                     for joint, frame in (self._link[link] for link in links)]
             plan = self._plans[links] = (
                 riding, [column[self._link[link][0]] for link in links],
-                np.array([self._link[link][1] for link in links]).reshape(-1, 4, 4))
+                np.array([self._link[link][1] for link in links]).reshape(-1, 4, 4), moved)
         return plan
 
     def _each_state(self, base: np.ndarray, q: np.ndarray, joints: Sequence[str],
@@ -72,6 +75,7 @@ class BatchedFrames:
         model, data = self.model, self.data
         slots = [self._slot[n] for n in joints]
         out = np.empty((len(states), len(riding), 4, 4))
+        placed = data.oMi  # (the vector Pinocchio fills in place: one lookup, not R a state)
         for s, row in enumerate(states):
             for (i, continuous), value in zip(slots, row, strict=True):
                 if continuous:
@@ -79,12 +83,12 @@ class BatchedFrames:
                 else:
                     q[i] = value
             pin.forwardKinematics(model, data, q)
-            for k, j in enumerate(riding):
-                out[s, k] = data.oMi[j].homogeneous
+            out[s] = [placed[j].homogeneous for j in riding]
         return base @ out
 
     def _all_states(self, base: np.ndarray, q: np.ndarray, joints: Sequence[str],
-                    states: np.ndarray, riding: list[int]) -> np.ndarray:
+                    states: np.ndarray, riding: list[int],
+                    moved: list[tuple[int, np.ndarray | None]]) -> np.ndarray:
         model, data = self.model, self.data
         pin.forwardKinematics(model, data, q)  # the joints that stay as they are
         varied = {self._joint_id[n]: column for column, n in enumerate(joints)}
@@ -98,8 +102,12 @@ class BatchedFrames:
             local = (self._placement[j] @ self._motion(j, states[:, varied[j]])
                      if j in varied else data.liMi[j].homogeneous)
             placed[j] = placed[int(model.parents[j])] @ local
-        return np.stack([np.broadcast_to(placed[j], (len(states), 4, 4)) for j in riding],
-                        axis=1)
+        # each link's frame written in place (S x 4 x 4, or one 4 x 4 for all the states
+        # where nothing it rides on moves)
+        out = np.empty((len(states), len(moved), 4, 4))
+        for column, (j, frame) in enumerate(moved):
+            out[:, column] = placed[j] if frame is None else placed[j] @ frame
+        return out
 
     def _motion(self, j: int, values: np.ndarray) -> np.ndarray:
         """The motion of joint j (S x 4 x 4) at each of `values` (angle or displacement)."""

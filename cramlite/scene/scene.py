@@ -267,10 +267,9 @@ class PlanningScene:
         what is held) ride along when `carry`."""
         container = self.container_of_joint(joint)
         riding = []
-        if carry and container is not None and container.inside_link == container.link:
+        if carry and container is not None:
             frame = self.kitchen_frames()[container.link]
-            skip = set(exclude) | set(self.belief.held)
-            for item in self.items_inside(container, skip):
+            for item in self.riding_along(joint, exclude):
                 riding.append((item, inverse(frame) @ pose_matrix(*self.object_pose(item))))
         self.belief.world_joints = {**self.belief.world_joints, joint: float(value)}
         if riding:
@@ -279,6 +278,14 @@ class PlanningScene:
             for item, relative in riding:
                 poses[item] = matrix_pose(frame @ relative)
             self.belief.poses = poses
+
+    def riding_along(self, joint: str, exclude: Sequence[str] = ()) -> list[str]:
+        """The items that move with a drawer's joint: those inside it, but `exclude` and
+        what is held (none for a door: what stands in a cupboard stays)."""
+        container = self.container_of_joint(joint)
+        if container is None or container.inside_link != container.link:
+            return []
+        return self.items_inside(container, set(exclude) | set(self.belief.held))
 
     def container_of_joint(self, joint: str) -> Container | None:
         return next((c for c in self.containers.values() if c.joint == joint), None)
