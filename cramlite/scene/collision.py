@@ -541,6 +541,8 @@ class MotionCheck:
                                       np.asarray(h.relative)[:3, 2].copy(),
                                       math.cos(math.radians(kind.upright_tolerance_deg)),
                                       h.name))
+        #: the tool frames of those items' grippers, in `_upright`'s order
+        self._upright_links = tuple(layout.links[row] for row, *_ in self._upright)
         self._world_joints = dict(scene.belief.world_joints)
         self._place_obstacles()
 
@@ -785,6 +787,8 @@ class MotionCheck:
         self.checks += len(states)
         if not len(states) or not len(self.parts):
             return None
+        if len(states) == 1 and self._tips(states):
+            return 0  # (a motion's end, checked alone first: most such ends tip the item)
         return self._first_collision(self._link_frames(states), order, margin_m)
 
     def states_free_along(self, bases: np.ndarray, states: np.ndarray) -> bool:
@@ -836,7 +840,10 @@ class MotionCheck:
         self.checks += 1
         if not len(self.parts):
             return True
-        frames = self._link_frames(np.asarray(q, dtype=float)[None])
+        q = np.asarray(q, dtype=float)[None]
+        if self._tips(q):
+            return False
+        frames = self._link_frames(q)
         if not self._kept_upright(frames):
             return False
         near, meets, boxes = self._near(frames, margin_m)
@@ -849,6 +856,18 @@ class MotionCheck:
     def moves_upright_items(self) -> bool:
         """Does this motion move an item that must stay upright?"""
         return bool(self._upright)
+
+    def _tips(self, states: np.ndarray) -> bool:
+        """Does one of these states tip an upright held item beyond its tilt? Asked of the
+        tool frames alone, before every link is placed: most states OMPL samples for a
+        motion holding such an item tip it (the same products as `_link_frames`, so the
+        same answer as `_kept_upright`)."""
+        if not self._upright:
+            return False
+        frames = self.owner.frames.frames(self.base_matrix, self._q, self.joints, states,
+                                          self._upright_links)
+        return not all(bool(np.all(frames[:, k, 2, :3] @ axis >= cos_limit))
+                       for k, (_, axis, cos_limit, _) in enumerate(self._upright))
 
     def _kept_upright(self, frames: np.ndarray) -> bool:
         """Every upright held item within its tilt at every state (S x L x 4 x 4)."""
