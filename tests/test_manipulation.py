@@ -125,7 +125,7 @@ def test_a_tipped_state_is_found_from_the_tool_frames_as_from_every_link() -> No
         for scale in (0.05, 0.2, 0.6) * 40:
             q = start + rng.normal(0.0, scale, len(start))
             kept = check._kept_upright(check._link_frames(q[None]))
-            assert check._tips(q[None]) == (not kept)
+            assert check._tips(q) == (not kept)
             if not kept:
                 assert not check.is_free(q) and check.first_collision(q[None]) == 0
             answers.append(kept)

@@ -272,3 +272,24 @@ def test_a_handles_whole_path_is_checked_as_one_batch_with_the_container_moving(
                 answers.add(expected)
             print(container.name, answers)
             assert False in answers
+
+
+def test_the_z_rows_of_links_rotations_are_those_of_their_frames() -> None:
+    """`BatchedFrames.z_rows` (what an upright item's tilt is asked of) gives the bottom
+    rows of the links' world rotations that `frames` gives, for every link of the robot,
+    whatever the base's heading."""
+    from cramlite.scene.kinematics import BatchedFrames
+    from cramlite.scene.models import pr2_model
+    from cramlite.scene.transforms import planar
+
+    model = pr2_model()
+    batched = BatchedFrames(model)
+    links = tuple(model.link_frames)
+    rng = np.random.default_rng(2)
+    for _ in range(5):
+        state = rng.uniform(-1.5, 1.5, len(RIGHT))
+        q = model.q({})
+        frames = batched.frames(planar(0.3, -0.2, float(rng.uniform(-3, 3))), q, RIGHT,
+                                state[None], links)
+        rows = batched.z_rows(q.copy(), RIGHT, state, links)
+        np.testing.assert_allclose(rows, frames[0, :, 2, :3], atol=1e-12)

@@ -56,6 +56,10 @@ TOLERANCE_M = 0.006
 #: Oriented bounds further apart than the margin by more than this hold shapes that
 #: cannot touch (the slack keeps coal's own rounding on the safe side).
 BOX_SLACK_M = 1e-5
+#: A state is rejected by the tool frames' tilt alone (`MotionCheck._tips`) only when it
+#: tips the item by more than this in the cosine (their products and every link's round
+#: differently, by ~1e-16); closer calls are left to every link's frames.
+TIP_SLACK = 1e-9
 #: Spacing of the surface points by which a mesh's depth inside a primitive is measured.
 SAMPLE_SPACING_M = 0.01
 #: Those points, by shape (the models, and so their shapes, live for the process).
@@ -541,8 +545,10 @@ class MotionCheck:
                                       np.asarray(h.relative)[:3, 2].copy(),
                                       math.cos(math.radians(kind.upright_tolerance_deg)),
                                       h.name))
-        #: the tool frames of those items' grippers, in `_upright`'s order
+        #: the tool frames of those items' grippers, in `_upright`'s order, and a copy of
+        #: the configuration for asking their tilt (`_tips`)
         self._upright_links = tuple(layout.links[row] for row, *_ in self._upright)
+        self._scratch_q = self._q.copy()
         self._world_joints = dict(scene.belief.world_joints)
         self._place_obstacles()
 
@@ -787,7 +793,7 @@ class MotionCheck:
         self.checks += len(states)
         if not len(states) or not len(self.parts):
             return None
-        if len(states) == 1 and self._tips(states):
+        if len(states) == 1 and self._tips(states[0]):
             return 0  # (a motion's end, checked alone first: most such ends tip the item)
         return self._first_collision(self._link_frames(states), order, margin_m)
 
@@ -840,10 +846,10 @@ class MotionCheck:
         self.checks += 1
         if not len(self.parts):
             return True
-        q = np.asarray(q, dtype=float)[None]
+        q = np.asarray(q, dtype=float)
         if self._tips(q):
             return False
-        frames = self._link_frames(q)
+        frames = self._link_frames(q[None])
         if not self._kept_upright(frames):
             return False
         near, meets, boxes = self._near(frames, margin_m)
@@ -857,17 +863,16 @@ class MotionCheck:
         """Does this motion move an item that must stay upright?"""
         return bool(self._upright)
 
-    def _tips(self, states: np.ndarray) -> bool:
-        """Does one of these states tip an upright held item beyond its tilt? Asked of the
-        tool frames alone, before every link is placed: most states OMPL samples for a
-        motion holding such an item tip it (the same products as `_link_frames`, so the
-        same answer as `_kept_upright`)."""
+    def _tips(self, q: np.ndarray) -> bool:
+        """Does state q surely tip an upright held item beyond its tilt? Asked of the tool
+        frames' rotations alone, before every link is placed: most states OMPL samples for
+        a motion holding such an item tip it. (Surely: by more than a rounding's worth, so
+        that a state this passes gets the very answer `_kept_upright` gives it.)"""
         if not self._upright:
             return False
-        frames = self.owner.frames.frames(self.base_matrix, self._q, self.joints, states,
-                                          self._upright_links)
-        return not all(bool(np.all(frames[:, k, 2, :3] @ axis >= cos_limit))
-                       for k, (_, axis, cos_limit, _) in enumerate(self._upright))
+        rows = self.owner.frames.z_rows(self._scratch_q, self.joints, q, self._upright_links)
+        return any(float(rows[k] @ axis) < cos_limit - TIP_SLACK
+                   for k, (_, axis, cos_limit, _) in enumerate(self._upright))
 
     def _kept_upright(self, frames: np.ndarray) -> bool:
         """Every upright held item within its tilt at every state (S x L x 4 x 4)."""
