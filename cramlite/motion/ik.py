@@ -100,6 +100,7 @@ class ArmIK:
             jid = self.model.getJointId(TORSO_JOINT)
             self._torso = (int(self.model.idx_qs[jid]), int(self.model.idx_vs[jid]))
         self._shoulder, self._reach, self._wrist, self._wrist_reach = self._reach_bounds()
+        self._damped_eye = self.options.damping * EYE6  # (the damping term of every step)
 
     def _reach_bounds(self) -> tuple[np.ndarray, float, np.ndarray, float]:
         """The shoulder's position (torso at 0); the farthest the tool frame gets from it
@@ -257,10 +258,12 @@ class ArmIK:
             held = [iv for iq, iv, lo, hi in self._bounded_v
                     if (qs[iq] <= lo and vs[iv] < 0) or (qs[iq] >= hi and vs[iv] > 0)]
             if held:
-                jac[:, held] = 0.0
+                for iv in held:  # (one or two: plain indexing costs less than a list's)
+                    jac[:, iv] = 0.0
                 torso_held = self._torso is not None and self._torso[1] in held
                 v = self._step(jac, err, q, None if torso_held else preferred_torso_m)
-                v[held] = 0.0
+                for iv in held:
+                    v[iv] = 0.0
             q = pin.integrate(model, q, v)
             qs = q.tolist()
             for i, lo, hi in self._bounded:
@@ -277,14 +280,14 @@ class ArmIK:
         torso stays near the height it started at) and a pull toward the preference is
         added in the null space. (See `_solve_spd` for the solver.)"""
         if preferred_torso_m is None or self._torso is None:
-            return jac.T @ _solve_spd(jac @ jac.T + self.options.damping * EYE6, err)
+            return jac.T @ _solve_spd(jac @ jac.T + self._damped_eye, err)
         iq, iv = self._torso
         weight = self.options.torso_weight
         jac = jac.copy()
         jac[:, iv] *= weight
         pull = np.zeros(self.model.nv)
         pull[iv] = self.options.torso_preference_gain * (preferred_torso_m - q[iq])
-        gram = jac @ jac.T + self.options.damping * EYE6
+        gram = jac @ jac.T + self._damped_eye
         w = _solve_spd(gram, np.column_stack([err, jac @ pull]))
         v = jac.T @ w[:, 0] + pull - jac.T @ w[:, 1]
         v[iv] *= weight
