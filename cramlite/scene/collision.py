@@ -570,9 +570,8 @@ class MotionCheck:
                 placements[k] = static[row] @ relative[self.obstacles[k].owner] @ \
                     layout.in_link[k]
         if len(layout.item_obstacles):
-            poses = np.array([self._item_matrix(name) for name in layout.item_names])
-            placements[layout.item_obstacles] = \
-                poses[layout.item_index] @ layout.in_link[layout.item_obstacles]
+            placements[layout.item_obstacles] = self._item_placements(
+                [self._item_matrix(name) for name in layout.item_names])
         placements[layout.kitchen] = kitchen_placed
         others = layout.others.tolist()
         lo, hi = np.empty((len(self.obstacles), 3)), np.empty((len(self.obstacles), 3))
@@ -580,16 +579,28 @@ class MotionCheck:
         if others:
             lo[others], hi[others] = _placed_bounds(layout.centres[others],
                                                     layout.halves[others], placements[others])
-        self._placements, self._lo, self._hi = placements, lo, hi
-        self._lo_list, self._hi_list = lo.tolist(), hi.tolist()
+        self._lo, self._hi = lo, hi
         self._lo_t, self._hi_t = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
-        self._obstacle_refs_list = ((placements[:, :3, :3] @ layout.refs[:, :, None])[:, :, 0]
-                                    + placements[:, :3, 3]).tolist()
         # each obstacle's bounds as an oriented box (axes, centre; half sizes: the layout's)
         self._box_axes = placements[:, :3, :3]
         self._box_centres = (self._box_axes @ layout.centres[:, :, None])[:, :, 0] + \
             placements[:, :3, 3]
-        self._transforms: dict[int, coal.Transform3s] = {}
+        self._for_exact_tests(placements, lo, hi)
+
+    def _for_exact_tests(self, placements: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                         ) -> None:
+        """The obstacles the exact tests (`_state_free`) use: their placements (and coal's
+        transforms of them, made when first asked), bounds and the points `enclosed`
+        tests, as plain floats for `_nested_test`."""
+        self._placements, self._transforms = placements, {}
+        self._lo_list, self._hi_list = lo.tolist(), hi.tolist()
+        self._obstacle_refs_list = ((placements[:, :3, :3] @ self.layout.refs[:, :, None])
+                                    [:, :, 0] + placements[:, :3, 3]).tolist()
+
+    def _item_placements(self, poses: Sequence[np.ndarray]) -> np.ndarray:
+        """The items' obstacles placed, given each item's frame (in `item_names` order)."""
+        layout = self.layout
+        return np.asarray(poses)[layout.item_index] @ layout.in_link[layout.item_obstacles]
 
     def _item_matrix(self, name: str) -> np.ndarray:
         return self._item_poses[name] if name in getattr(self, "_item_poses", {}) \
@@ -629,14 +640,10 @@ class MotionCheck:
         near, meets, boxes = self._near(frames, 0.0, moving)
         saved = (self._placements, self._lo_list, self._hi_list, self._obstacle_refs_list,
                  self._transforms)
-        refs = self.layout.refs[:, :, None]
         try:
             for i in np.flatnonzero(near.any(axis=(1, 2)) | meets.any(axis=1)).tolist():
-                placements = moving.placements[i]  # (that state's world, for the exact tests)
-                self._placements, self._transforms = placements, {}
-                self._lo_list, self._hi_list = moving.lo[i].tolist(), moving.hi[i].tolist()
-                self._obstacle_refs_list = ((placements[:, :3, :3] @ refs)[:, :, 0]
-                                            + placements[:, :3, 3]).tolist()
+                # (that state's world, for the exact tests)
+                self._for_exact_tests(moving.placements[i], moving.lo[i], moving.hi[i])
                 if not self._state_free(frames[i], near[i], meets[i], 0.0,
                                         tuple(b[i] for b in boxes)):
                     return False
@@ -657,25 +664,22 @@ class MotionCheck:
         items = layout.item_obstacles
         carried = bool(len(items)) and bool(scene.riding_along(joint))
         if len(items) and not carried:  # (the items lie as believed now, in every state)
-            poses = np.array([scene.item_matrix(name) for name in layout.item_names])
-            placements[:, items] = poses[layout.item_index] @ layout.in_link[items]
+            placements[:, items] = self._item_placements(
+                [scene.item_matrix(name) for name in layout.item_names])
             lo[:, items], hi[:, items] = _placed_bounds(layout.centres[items],
                                                         layout.halves[items], placements[0, items])
         for i, value in enumerate(values):
+            placed, kitchen_lo, kitchen_hi = self.owner.kitchen_block(
+                {**scene.belief.world_joints, joint: float(value)})
+            placements[i, layout.kitchen] = placed
+            lo[i, layout.kitchen], hi[i, layout.kitchen] = kitchen_lo, kitchen_hi
             if carried:
                 with scene.world_joint_at(joint, float(value), carry=True):
-                    placed, kitchen_lo, kitchen_hi = self.owner.kitchen_block(
-                        dict(scene.belief.world_joints))
-                    poses = np.array([scene.item_matrix(name) for name in layout.item_names])
-                placements[i, items] = poses[layout.item_index] @ layout.in_link[items]
+                    poses = [scene.item_matrix(name) for name in layout.item_names]
+                placements[i, items] = self._item_placements(poses)
                 lo[i, items], hi[i, items] = _placed_bounds(layout.centres[items],
                                                             layout.halves[items],
                                                             placements[i, items])
-            else:
-                placed, kitchen_lo, kitchen_hi = self.owner.kitchen_block(
-                    {**scene.belief.world_joints, joint: float(value)})
-            placements[i, layout.kitchen] = placed
-            lo[i, layout.kitchen], hi[i, layout.kitchen] = kitchen_lo, kitchen_hi
         axes = placements[..., :3, :3]
         centres = (axes @ layout.centres[None, :, :, None])[..., 0] + placements[..., :3, 3]
         return _ObstaclesByState(placements, lo, hi, np.ascontiguousarray(lo.transpose(2, 0, 1)),

@@ -9,7 +9,6 @@ several times faster from 8 states on.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -47,13 +46,13 @@ class BatchedFrames:
         and every other joint at `values` (by name, or Pinocchio's configuration), the
         model's root at `base` (4 x 4)."""
         states = np.asarray(states, dtype=float).reshape(len(states), len(joints))
-        riding, columns, placements, moved = self._plan(tuple(links))
+        riding, columns, placements, per_link = self._plan(tuple(links))
         q = values.copy() if isinstance(values, np.ndarray) else self.articulated.q(values)
         if len(states) < FEW_STATES or any(self._kind[self._joint_id[n]][0] == "other"
                                            for n in joints):
             out = self._each_state(base, q, joints, states, riding)
             return out[:, columns] @ placements
-        return self._all_states(base, q, joints, states, riding, moved)
+        return self._all_states(base, q, joints, states, riding, per_link)
 
     def z_rows(self, q: np.ndarray, joints: Sequence[str], state: np.ndarray,
                links: Sequence[str]) -> np.ndarray:
@@ -62,12 +61,7 @@ class BatchedFrames:
         configuration, changed in place at `joints`' slots). The robot's base only turns
         about the vertical, which leaves these rows as they are. Cheaper than `frames` for
         one state: how far a held item tilts needs no more."""
-        for name, value in zip(joints, state, strict=True):
-            i, continuous = self._slot[name]
-            if continuous:
-                q[i], q[i + 1] = math.cos(value), math.sin(value)
-            else:
-                q[i] = value
+        _put_state(q, [self._slot[n] for n in joints], state)
         pin.forwardKinematics(self.model, self.data, q)
         placed = self.data.oMi
         return np.array([placed[self._link[link][0]].rotation[2] @ self._link[link][1][:3, :3]
@@ -82,11 +76,11 @@ class BatchedFrames:
         if plan is None:
             riding = sorted({self._link[link][0] for link in links})
             column = {j: k for k, j in enumerate(riding)}
-            moved = [(joint, None if np.array_equal(frame, np.eye(4)) else frame)
-                     for joint, frame in (self._link[link] for link in links)]
+            per_link = [(joint, None if np.array_equal(frame, np.eye(4)) else frame)
+                        for joint, frame in (self._link[link] for link in links)]
             plan = self._plans[links] = (
                 riding, [column[self._link[link][0]] for link in links],
-                np.array([self._link[link][1] for link in links]).reshape(-1, 4, 4), moved)
+                np.array([self._link[link][1] for link in links]).reshape(-1, 4, 4), per_link)
         return plan
 
     def _each_state(self, base: np.ndarray, q: np.ndarray, joints: Sequence[str],
@@ -96,18 +90,14 @@ class BatchedFrames:
         out = np.empty((len(states), len(riding), 4, 4))
         placed = data.oMi  # (the vector Pinocchio fills in place: one lookup, not R a state)
         for s, row in enumerate(states):
-            for (i, continuous), value in zip(slots, row, strict=True):
-                if continuous:
-                    q[i], q[i + 1] = np.cos(value), np.sin(value)
-                else:
-                    q[i] = value
+            _put_state(q, slots, row)
             pin.forwardKinematics(model, data, q)
             out[s] = [placed[j].homogeneous for j in riding]
         return base @ out
 
     def _all_states(self, base: np.ndarray, q: np.ndarray, joints: Sequence[str],
                     states: np.ndarray, riding: list[int],
-                    moved: list[tuple[int, np.ndarray | None]]) -> np.ndarray:
+                    per_link: list[tuple[int, np.ndarray | None]]) -> np.ndarray:
         model, data = self.model, self.data
         pin.forwardKinematics(model, data, q)  # the joints that stay as they are
         varied = {self._joint_id[n]: column for column, n in enumerate(joints)}
@@ -123,8 +113,8 @@ class BatchedFrames:
             placed[j] = placed[int(model.parents[j])] @ local
         # each link's frame written in place (S x 4 x 4, or one 4 x 4 for all the states
         # where nothing it rides on moves)
-        out = np.empty((len(states), len(moved), 4, 4))
-        for column, (j, frame) in enumerate(moved):
+        out = np.empty((len(states), len(per_link), 4, 4))
+        for column, (j, frame) in enumerate(per_link):
             out[:, column] = placed[j] if frame is None else placed[j] @ frame
         return out
 
@@ -142,6 +132,16 @@ class BatchedFrames:
         out[:, :3, :3] = (np.eye(3) + np.sin(values)[:, None, None] * skew
                           + (1.0 - np.cos(values))[:, None, None] * (skew @ skew))
         return out
+
+
+def _put_state(q: np.ndarray, slots: list[tuple[int, bool]], row: Sequence[float]) -> None:
+    """Write a row of joint values into Pinocchio's configuration q at their slots (a
+    continuous joint as its angle's cosine and sine)."""
+    for (i, continuous), value in zip(slots, row, strict=True):
+        if continuous:
+            q[i], q[i + 1] = np.cos(value), np.sin(value)
+        else:
+            q[i] = value
 
 
 def _joint_kind(joint) -> tuple[str, np.ndarray]:
