@@ -15,7 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cramlite.scene.geometry import triangle_samples
 from cramlite.scene.models import pr2_model
 
 #: The finger joint every other finger joint of a gripper follows.
@@ -73,10 +72,7 @@ def gripper_geometry() -> GripperGeometry:
     gaps, pads, palms = [], [], []
     tool = prefix + "gripper_tool_frame"
     links = [prefix + name for name in HAND]
-    # each mesh's surface points in its own frame (the same at every angle)
-    samples = {id(shape): triangle_samples(shape.vertices[shape.triangles], 0.002)
-               for link in links for shape in robot.shapes_by_link.get(link, [])
-               if shape.vertices is not None}
+    # (the meshes' vertices: a coordinate's extremes over a triangle lie at its corners)
     for angle in angles:
         frames = robot.link_placements(robot.with_mimics({leader: float(angle)}),
                                        [tool, *links])
@@ -88,7 +84,7 @@ def gripper_geometry() -> GripperGeometry:
                 if shape.vertices is None:
                     continue
                 placed = to_tool @ frames[link] @ shape.in_link
-                out.append(samples[id(shape)] @ placed[:3, :3].T + placed[:3, 3])
+                out.append(shape.vertices @ placed[:3, :3].T + placed[:3, 3])
             points[link] = np.vstack(out)
         left, right = points[prefix + TIPS[0]], points[prefix + TIPS[1]]
         gaps.append(float(left[:, 1].min() - right[:, 1].max()))
