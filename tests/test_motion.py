@@ -184,3 +184,37 @@ def test_footprint_check_agrees_with_every_point_looked_up(planner) -> None:
             assert check.is_free(x, y, yaw) == (not every), (x, y, yaw)
             blocked += every
         assert 300 < blocked < 2700
+
+
+def test_the_convex_hull_is_the_counter_clockwise_corners_of_the_points() -> None:
+    """convex_hull_2d on mesh-like point clouds (many points inside, duplicates, points
+    along the edges): its corners are input points, every point lies within it, each
+    corner turns left (no point along an edge kept), it starts at the lowest x (then y);
+    and unique_rows is np.unique's rows."""
+    from cramlite.motion.footprint import convex_hull_2d, unique_rows
+
+    rng = np.random.default_rng(3)
+    for k in range(200):
+        n = int(rng.integers(3, 400))
+        points = np.round(rng.normal(size=(n, 2)) * rng.uniform(0.01, 0.5, size=2), 3)
+        if k % 3 == 0:  # a box's outline: points along straight edges, and its corners
+            t = rng.uniform(size=n)[:, None]
+            corners = np.array([[0.0, 0.0], [0.2, 0.0], [0.2, 0.1], [0.0, 0.1]])
+            edge = rng.integers(0, 4, size=n)
+            points = np.vstack([corners, corners[edge] + t * (np.roll(corners, -1, 0)[edge]
+                                                             - corners[edge])])
+        points = np.vstack([points, points[: n // 4]])  # duplicates
+        assert np.array_equal(unique_rows(points), np.unique(points, axis=0))
+        hull = convex_hull_2d(points)
+        assert all((points == corner).all(axis=1).any() for corner in hull)
+        edges = np.roll(hull, -1, axis=0) - hull
+        turn = edges[:, 0] * np.roll(edges, -1, axis=0)[:, 1] - \
+            edges[:, 1] * np.roll(edges, -1, axis=0)[:, 0]
+        assert (turn > 0).all()  # counter-clockwise, a strict corner at every point
+        rel = points[:, None, :] - hull[None]
+        cross = edges[None, :, 0] * rel[..., 1] - edges[None, :, 1] * rel[..., 0]
+        assert (cross >= -1e-12).all()  # every point within
+        lowest = unique_rows(points)[0]
+        assert np.array_equal(hull[0], lowest)
+        if k % 3 == 0:
+            assert len(hull) == 4

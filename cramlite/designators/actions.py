@@ -49,7 +49,7 @@ from cramlite.designators.motions import (
 )
 from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription, as_object
 from cramlite.designators.tasks import ActionDesignator
-from cramlite.motion.footprint import convex_hull_2d
+from cramlite.motion.footprint import convex_hull_2d, unique_rows
 from cramlite.motion.ik import ARMS
 from cramlite.motion.trajectory import wrap_angle
 from cramlite.process_cache import ProcessCache
@@ -575,7 +575,7 @@ def footprint_outline(points_xy: np.ndarray, spacing: float) -> np.ndarray:
     pts = np.asarray(points_xy, dtype=float).reshape(-1, 2)
     hull = convex_hull_2d(pts)
     if len(hull) < 3 or abs(_area(hull)) < 1e-12:  # fewer than 3 points, or all on a line
-        return np.unique(np.round(pts, 6), axis=0)
+        return unique_rows(np.round(pts, 6))
     # n points on each edge a -> b, from a (inclusive) towards b (exclusive)
     edges = np.roll(hull, -1, axis=0) - hull
     n = np.maximum(1, np.ceil(np.hypot(edges[:, 0], edges[:, 1]) / spacing)).astype(int)
