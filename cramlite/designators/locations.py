@@ -46,7 +46,7 @@ from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names
 from cramlite.motion.trajectory import densify
 from cramlite.process_cache import ProcessCache
 from cramlite.scene.collision import HeldObject
-from cramlite.scene.robot_points import upper_body_points
+from cramlite.scene.robot_points import upper_body_parts, upper_body_points
 from cramlite.scene.transforms import Quat, Vec3, pose_matrix, quat_yaw
 from cramlite.world.pr2 import PARK_JOINTS, TORSO_JOINT, TORSO_UP_M
 
@@ -384,6 +384,11 @@ def _solve_carry(ctx: RobotContext, arm: str, grasp: str, grasp_height: float,
     rng = np.random.default_rng(0)
     seeds = [{**PARK_JOINTS[arm], TORSO_JOINT: torso_m}, reaching_seed(arm)]
     seeds += [ik.from_q(ik.random_q(rng)) for _ in range(CARRY_STARTS - len(seeds))]
+    # the rest of the robot stands the same for every solution (the torso is fixed): what
+    # of it sticks out is worked out once, the arm's links for each solution
+    parts = upper_body_parts(ctx.scene)
+    others = [link for part, (_, links) in parts.items() if part != arm for link in links]
+    rest_low: dict[float, float] = {}
     for bottom in (CARRY_BOTTOM_Z_M, *CARRY_LOWER_BOTTOMS_M):  # (highest first)
         best, best_low = None, -np.inf
         for seed in seeds:
@@ -391,7 +396,10 @@ def _solve_carry(ctx: RobotContext, arm: str, grasp: str, grasp_height: float,
                                 fixed_torso_m=torso_m, restarts=0)
             if solution is None:
                 continue
-            low = _lowest_outside(ctx, solution.joints)
+            torso = solution.joints[TORSO_JOINT]
+            if torso not in rest_low:
+                rest_low[torso] = _lowest_outside(ctx, {TORSO_JOINT: torso}, others)
+            low = min(rest_low[torso], _lowest_outside(ctx, solution.joints, parts[arm][1]))
             if low > best_low:
                 best, best_low = solution.joints, low
         if best is not None:
@@ -407,12 +415,13 @@ _CARRY: ProcessCache[dict[str, float] | None] = ProcessCache(2_000)
 CARRY_STARTS = 8
 
 
-def _lowest_outside(ctx: RobotContext, joints: dict[str, float]) -> float:
-    """How high the lowest point of the robot that sticks out of its base square is (the
-    robot at the origin), with `joints`."""
+def _lowest_outside(ctx: RobotContext, joints: dict[str, float],
+                    links: Sequence[str]) -> float:
+    """How high the lowest point of these robot links that sticks out of its base square
+    is (the robot at the origin), with `joints` (inf: none sticks out)."""
     square = ctx.checker.half_size_m
     lows = [float(pts[np.any(np.abs(pts[:, :2]) > square, axis=1), 2].min())
-            for pts in upper_body_points(ctx.scene, joints=joints)
+            for pts in upper_body_points(ctx.scene, list(links), joints=joints)
             if np.any(np.abs(pts[:, :2]) > square)]
     return min(lows, default=np.inf)
 
