@@ -166,14 +166,27 @@ class ArmIK:
         return out
 
     def random_q(self, rng: np.random.Generator) -> np.ndarray:
-        q = pin.neutral(self.model)
-        for i, lo, hi in self._bounded:
-            q[i] = rng.uniform(lo, hi)
-        for i, cont in zip(self._idx_q, self._continuous, strict=True):
-            if cont:
-                a = rng.uniform(-np.pi, np.pi)
-                q[i], q[i + 1] = np.cos(a), np.sin(a)
+        """A configuration drawn uniformly within the limits (a continuous joint's angle
+        within a turn), one draw per joint: the limited joints', then the continuous'."""
+        draw_lo, draw_hi, bounded, continuous, neutral = self._draws
+        q = neutral.copy()
+        values = rng.uniform(draw_lo, draw_hi)  # (one call: the same numbers, in order)
+        q[bounded] = values[:len(bounded)]
+        for i, a in zip(continuous, values[len(bounded):].tolist(), strict=True):
+            q[i], q[i + 1] = np.cos(a), np.sin(a)
         return q
+
+    @functools.cached_property
+    def _draws(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[int], np.ndarray]:
+        """(lower and upper bounds of each draw, the limited joints' and the continuous
+        joints' q indices, the neutral configuration) for `random_q`."""
+        continuous = [i for i, cont in zip(self._idx_q, self._continuous, strict=True)
+                      if cont]
+        lows = [lo for _, lo, _ in self._bounded] + [-np.pi] * len(continuous)
+        highs = [hi for _, _, hi in self._bounded] + [np.pi] * len(continuous)
+        return (np.array(lows, dtype=float), np.array(highs, dtype=float),
+                np.array([i for i, _, _ in self._bounded], dtype=int), continuous,
+                pin.neutral(self.model))
 
     def forward(self, joints: dict[str, float]) -> pin.SE3:
         q = self.to_q(joints)

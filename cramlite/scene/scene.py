@@ -416,9 +416,13 @@ def shape_corners(shape: Shape, placement: np.ndarray) -> np.ndarray:
     if shape.vertices is not None:
         local = shape.vertices
     else:
-        local = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1)
-                          for sz in (-1, 1)]) * shape.half + shape.centre
+        local = _UNIT_CORNERS * shape.half + shape.centre
     return local @ placement[:3, :3].T + placement[:3, 3]
+
+
+#: A box's corners at unit half extents.
+_UNIT_CORNERS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1)
+                          for sz in (-1, 1)], dtype=float)
 
 
 __all__ = ["ARMS", "BasePose", "Belief", "FLOOR_LINK", "Held", "PlanningScene", "Quat",
