@@ -533,8 +533,12 @@ class MotionCheck:
         #: the link carrying it, and its point that `enclosed` tests
         (self._in_frame, self._centres, self._halves, self._rotations,
          self._refs) = owner.parts_in_frames(layout, held)
-        self._static_frames = scene.link_matrices(layout.static_links, self.values, self.base) \
-            if layout.static_links else {}
+        #: the world frames (n x 4 x 4) of the robot links that do not move, in
+        #: `layout.static_links`' order
+        self._static = None
+        if layout.static_links:
+            frames = scene.robot.link_placements_at(self._q, list(layout.static_links))
+            self._static = self.base_matrix @ np.array(list(frames.values()))
         #: upright held items that this motion moves: (frame row, the item's z axis in the
         #: tool frame, cos of the largest tilt allowed, name)
         self._upright = []
@@ -561,7 +565,7 @@ class MotionCheck:
         relative = {h.name: h.relative for h in self.held}
         kitchen_placed, kitchen_lo, kitchen_hi = self.owner.kitchen_block(self._world_joints)
         if len(layout.static_links):
-            static = np.array([self._static_frames[link] for link in layout.static_links])
+            static = self._static
             if len(layout.robot_obstacles):
                 placements[layout.robot_obstacles] = \
                     static[layout.robot_links] @ layout.in_link[layout.robot_obstacles]
@@ -591,11 +595,19 @@ class MotionCheck:
                          ) -> None:
         """The obstacles the exact tests (`_state_free`) use: their placements (and coal's
         transforms of them, made when first asked), bounds and the points `enclosed`
-        tests, as plain floats for `_nested_test`."""
+        tests, as plain floats for `_nested_test` (made when first asked too: most checks
+        never make an exact test)."""
         self._placements, self._transforms = placements, {}
-        self._lo_list, self._hi_list = lo.tolist(), hi.tolist()
-        self._obstacle_refs_list = ((placements[:, :3, :3] @ self.layout.refs[:, :, None])
-                                    [:, :, 0] + placements[:, :3, 3]).tolist()
+        self._exact_bounds, self._exact_lists = (lo, hi), None
+
+    def _obstacle_lists(self) -> tuple[list, list, list]:
+        """The obstacles' bounds (low, high) and the points `enclosed` tests, as lists."""
+        if self._exact_lists is None:
+            placements, (lo, hi) = self._placements, self._exact_bounds
+            refs = (placements[:, :3, :3] @ self.layout.refs[:, :, None])[:, :, 0] + \
+                placements[:, :3, 3]
+            self._exact_lists = (lo.tolist(), hi.tolist(), refs.tolist())
+        return self._exact_lists
 
     def _item_placements(self, poses: Sequence[np.ndarray]) -> np.ndarray:
         """The items' obstacles placed, given each item's frame (in `item_names` order)."""
@@ -638,8 +650,7 @@ class MotionCheck:
             return False
         moving = self._obstacles_by_state(joint, values)
         near, meets, boxes = self._near(frames, 0.0, moving)
-        saved = (self._placements, self._lo_list, self._hi_list, self._obstacle_refs_list,
-                 self._transforms)
+        saved = (self._placements, self._exact_bounds, self._exact_lists, self._transforms)
         try:
             for i in np.flatnonzero(near.any(axis=(1, 2)) | meets.any(axis=1)).tolist():
                 # (that state's world, for the exact tests)
@@ -649,7 +660,7 @@ class MotionCheck:
                     return False
             return True
         finally:
-            (self._placements, self._lo_list, self._hi_list, self._obstacle_refs_list,
+            (self._placements, self._exact_bounds, self._exact_lists,
              self._transforms) = saved
 
     def _obstacles_by_state(self, joint: str, values: Sequence[float]) -> _ObstaclesByState:
@@ -764,7 +775,7 @@ class MotionCheck:
         Only if the point of one that `enclosed` tests lies in the other's box. (Plain
         floats: asked of a few pairs a state, where array operations cost more.)"""
         centres, spans, refs = (b.tolist() for b in boxes)
-        lo, hi, obstacle_refs = self._lo_list, self._hi_list, self._obstacle_refs_list
+        lo, hi, obstacle_refs = self._obstacle_lists()
 
         def within(point: list[float], centre: list[float], span: list[float]) -> bool:
             return (abs(point[0] - centre[0]) <= span[0] and abs(point[1] - centre[1]) <= span[1]

@@ -154,23 +154,37 @@ class ArticulatedModel:
 
     def q(self, values: dict[str, float]) -> np.ndarray:
         """Pinocchio's configuration from joint values by name (others: zero)."""
-        q = pin.neutral(self.model)
+        neutral, slots = self._q_slots
+        q = list(neutral)  # (a list, filled, then one array: item by item costs more)
         for name, value in values.items():
-            info = self.joints.get(name)
-            if info is None:
+            slot = slots.get(name)
+            if slot is None:
                 continue
-            if info.kind == "continuous":
-                q[info.q_index], q[info.q_index + 1] = math.cos(value), math.sin(value)
+            i, continuous = slot
+            if continuous:
+                q[i], q[i + 1] = math.cos(value), math.sin(value)
             else:
-                q[info.q_index] = value
-        return q
+                q[i] = value
+        return np.array(q, dtype=float)
+
+    @functools.cached_property
+    def _q_slots(self) -> tuple[list[float], dict[str, tuple[int, bool]]]:
+        """The neutral configuration as a list, and each joint's (q index, continuous?)."""
+        return (pin.neutral(self.model).tolist(),
+                {name: (info.q_index, info.kind == "continuous")
+                 for name, info in self.joints.items()})
 
     def link_placements(self, values: dict[str, float], links: list[str] | None = None,
                         ) -> dict[str, np.ndarray]:
         """The links' frames (4 x 4, in the model's root frame) with joints at `values`."""
+        return self.link_placements_at(self.q(values), links)
+
+    def link_placements_at(self, q: np.ndarray, links: list[str] | None = None,
+                           ) -> dict[str, np.ndarray]:
+        """`link_placements` at Pinocchio's configuration `q` (see `q`)."""
         model = self.model
         data = self._data
-        pin.forwardKinematics(model, data, self.q(values))
+        pin.forwardKinematics(model, data, q)
         out = {}
         for name in (links if links is not None else self.link_frames):
             out[name] = pin.updateFramePlacement(model, data,
