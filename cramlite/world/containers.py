@@ -17,6 +17,7 @@ from typing import Any
 import yaml
 
 from cramlite.errors import SetupError
+from cramlite.world.strict_yaml import load_strict
 
 KINDS = ("drawer", "cupboard")
 Vec3 = tuple[float, float, float]
@@ -56,7 +57,7 @@ def load_containers(world_urdf: Path) -> dict[str, Container]:
         return {}
     src = str(path)
     try:
-        data = yaml.safe_load(path.read_text())
+        data = load_strict(path.read_text())  # (as setups are read: no repeated keys)
     except (yaml.YAMLError, OSError, UnicodeDecodeError) as exc:
         raise SetupError(f"cannot read containers ({type(exc).__name__})", source=src) from None
     if not isinstance(data, dict) or not isinstance(data.get("containers"), dict):
