@@ -119,10 +119,11 @@ class ArmIK:
                 q[self._torso[0]] = 0.0
             pin.forwardKinematics(model, data, q)
             origin = data.oMi[shoulder].translation
-            tool = pin.updateFramePlacement(model, data, self.frame_id)
-            reach = max(reach, float(np.linalg.norm(tool.translation - origin)))
-            wrist_reach = max(wrist_reach, float(np.linalg.norm(data.oMi[wrist].translation
-                                                                - origin)))
+            tool = pin.updateFramePlacement(model, data, self.frame_id).translation - origin
+            to_wrist = data.oMi[wrist].translation - origin
+            # (np.linalg.norm's own arithmetic, without its checks: 500 samples an arm)
+            reach = max(reach, math.sqrt(tool.dot(tool)))
+            wrist_reach = max(wrist_reach, math.sqrt(to_wrist.dot(to_wrist)))
         in_tool = data.oMf[self.frame_id].actInv(data.oMi[wrist]).translation.copy()
         return data.oMi[shoulder].translation.copy(), reach + 0.02, in_tool, wrist_reach + 0.02
 
