@@ -287,3 +287,23 @@ def test_a_setup_hash_covers_the_file_and_its_urdfs(tmp_path: Path, setup_text: 
     (tmp_path / "cup.urdf").write_text((items / "cup.urdf").read_text() + "<!-- edited -->")
     edited = load_setup(_write(tmp_path, setup_text.replace("type: cup ", "type: cup.urdf ")))
     assert edited.content_hash != own_cup.content_hash
+
+
+@pytest.mark.parametrize(("change", "fragments"), [
+    (lambda t: t.replace("  drawer_2:", "  drawer_1:", 1), ("line 4", "'drawer_1' appears twice")),
+    (lambda t: t.replace("containers:", "containers: &all", 1), ("line 2", "anchors and aliases")),
+    (lambda t: t.replace("  cupboard: {", "  cupboard: {{", 1), ("line", "malformed YAML")),
+])
+def test_a_containers_file_is_read_by_the_setups_rules_and_refused_in_one_line(
+        tmp_path: Path, setup_text: str, change, fragments) -> None:
+    """(A world's containers file: a repeated container would silently replace another.)"""
+    import shutil
+
+    from tests.conftest import ROOT
+
+    shutil.copy(ROOT / "worlds" / "kitchen.urdf", tmp_path / "kitchen.urdf")
+    containers = (ROOT / "worlds" / "kitchen.containers.yaml").read_text()
+    (tmp_path / "kitchen.containers.yaml").write_text(change(containers))
+    path = _write(tmp_path, setup_text.replace("world: kitchen ", "world: kitchen.urdf ", 1))
+    _assert_user_error(run_cli("show", str(path)), str(tmp_path / "kitchen.containers.yaml"),
+                       *fragments)

@@ -17,7 +17,7 @@ from typing import Any
 import yaml
 
 from cramlite.errors import SetupError
-from cramlite.world.strict_yaml import load_strict
+from cramlite.world.strict_yaml import describe_yaml_error, load_strict
 
 KINDS = ("drawer", "cupboard")
 Vec3 = tuple[float, float, float]
@@ -58,7 +58,10 @@ def load_containers(world_urdf: Path) -> dict[str, Container]:
     src = str(path)
     try:
         data = load_strict(path.read_text())  # (as setups are read: no repeated keys)
-    except (yaml.YAMLError, OSError, UnicodeDecodeError) as exc:
+    except yaml.YAMLError as exc:
+        message, where = describe_yaml_error(exc)
+        raise SetupError(message, source=src, field=where) from None
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
         raise SetupError(f"cannot read containers ({type(exc).__name__})", source=src) from None
     if not isinstance(data, dict) or not isinstance(data.get("containers"), dict):
         raise SetupError("expected a mapping 'containers: {name: {...}}'", source=src)

@@ -23,7 +23,7 @@ from pathlib import Path
 import yaml
 
 from cramlite.errors import SetupError
-from cramlite.world.strict_yaml import ALIASES_REFUSED, load_strict
+from cramlite.world.strict_yaml import describe_yaml_error, load_strict
 
 KEYS = {"upright", "upright_tolerance_deg", "yaw_symmetry", "grasps", "reason"}
 GRASP_KINDS = ("front", "top", "rim")
@@ -65,11 +65,8 @@ def _load(path: str, stamp: float) -> ItemType:
     try:
         raw = load_strict(file.read_text(encoding="utf-8"))
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        problem = getattr(exc, "problem", None) or "could not parse"
-        raise SetupError(f"malformed YAML ({problem})" if problem != ALIASES_REFUSED
-                         else f"YAML {problem}", source=str(file),
-                         field=f"line {mark.line + 1}" if mark is not None else None) from None
+        message, where = describe_yaml_error(exc)
+        raise SetupError(message, source=str(file), field=where) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise SetupError(f"cannot read it: {exc}", source=str(file)) from None
     if raw is None:

@@ -23,7 +23,7 @@ import yaml
 from cramlite.errors import SetupError
 from cramlite.resources import worlds_dir
 from cramlite.world.item_types import item_type_file
-from cramlite.world.strict_yaml import ALIASES_REFUSED, load_strict
+from cramlite.world.strict_yaml import describe_yaml_error, load_strict
 from cramlite.world.urdf_check import urdf_problem
 
 #: Relational-dependency categories of the OPM (SPEC section 1); "none" means k = 1.
@@ -137,13 +137,10 @@ def load_setup(setup: str | Path) -> Setup:
         content = path.read_bytes()
         data = load_strict(content.decode("utf-8"))
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark is not None else None
-        problem = getattr(exc, "problem", None) or "could not parse"
-        if problem == ALIASES_REFUSED:
-            raise SetupError(f"YAML {problem}", source=src, field=where) from None
-        raise SetupError(f"malformed YAML ({problem}); expected a YAML mapping",
-                         source=src, field=where) from None
+        message, where = describe_yaml_error(exc)
+        if message.startswith("malformed"):
+            message += "; expected a YAML mapping"
+        raise SetupError(message, source=src, field=where) from None
     except UnicodeDecodeError:
         raise SetupError("not UTF-8 text; expected a setup YAML file", source=src) from None
     except OSError as exc:

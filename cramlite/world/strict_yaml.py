@@ -71,3 +71,11 @@ def _refuse_anchors(text: str) -> None:
     for event in yaml.parse(text, Loader=_StrictCLoader):
         if getattr(event, "anchor", None) is not None:  # (an alias names its anchor)
             raise yaml.scanner.ScannerError(None, None, ALIASES_REFUSED, event.start_mark)
+
+
+def describe_yaml_error(exc: yaml.YAMLError) -> tuple[str, str | None]:
+    """A YAML error as (what is wrong, where: "line N", or None), for a one-line error."""
+    mark = getattr(exc, "problem_mark", None)
+    problem = getattr(exc, "problem", None) or "could not parse"
+    message = f"YAML {problem}" if problem == ALIASES_REFUSED else f"malformed YAML ({problem})"
+    return message, (f"line {mark.line + 1}" if mark is not None else None)
