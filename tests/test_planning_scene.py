@@ -18,6 +18,7 @@ from cramlite.designators import (
     simulated_robot,
 )
 from cramlite.designators.context import scene_collisions
+from cramlite.scene.collision import HeldObject
 from cramlite.trace import read_trace
 from cramlite.trace.check import penetrations
 from cramlite.trial import TrialRunner
@@ -293,3 +294,47 @@ def test_the_z_rows_of_links_rotations_are_those_of_their_frames() -> None:
                                 state[None], links)
         rows = batched.z_rows(q.copy(), RIGHT, state, links)
         np.testing.assert_allclose(rows, frames[0, :, 2, :3], atol=1e-12)
+
+
+def test_the_nesting_prefilter_asks_of_each_part_where_it_is() -> None:
+    """Before the exact test of one shape wholly inside another, the check asks whether the
+    point `enclosed` tests of one lies in the other's bounds: that point must be where the
+    part is in that state (its shape's point, placed by the part's frame), for robot
+    links and a held item alike, in a batch of states."""
+    from cramlite.scene.collision import _reference_point
+
+    with simulated_robot(load_setup("v1")) as ctx:
+        robot = ctx.scene.robot
+        names = ["torso_lift_joint", *(n for n in robot.joints if n.startswith("r_")
+                                       and "gripper" not in n)]
+        for held in ([], [HeldObject("milk", "right", np.eye(4))]):
+            check = ctx.collisions.check(names, held=held)
+            rng = np.random.default_rng(4)
+            lows = np.array([max(robot.joints[n].lower, -np.pi) for n in names])
+            highs = np.array([min(robot.joints[n].upper, np.pi) for n in names])
+            states = rng.uniform(lows, highs, size=(12, len(names)))
+            frames = check._link_frames(states)
+            _, _, boxes = check._near(frames)
+            placements = check._placements
+            obstacle_refs = [placements[k][:3, :3] @ _reference_point(o.shape) +
+                             placements[k][:3, 3] for k, o in enumerate(check.obstacles)]
+            asked = 0
+            for s in range(len(states)):
+                part_obstacle, part_part = check._nested_test(tuple(b[s] for b in boxes))
+                centres, spans = boxes[0][s], boxes[1][s]
+                refs = []
+                for p, part in enumerate(check.parts):
+                    placed = frames[s][check._rows[p]] @ check._in_frame[p]
+                    refs.append(placed[:3, :3] @ _reference_point(part.shape) + placed[:3, 3])
+                for p in range(len(check.parts)):
+                    for k in range(len(check.obstacles)):
+                        expected = bool((check._lo[k] <= refs[p]).all() and
+                                        (refs[p] <= check._hi[k]).all() or
+                                        (np.abs(obstacle_refs[k] - centres[p]) <= spans[p]).all())
+                        assert part_obstacle(p, k) == expected
+                        asked += expected
+                    j = int(rng.integers(len(check.parts)))
+                    expected = bool((np.abs(refs[p] - centres[j]) <= spans[j]).all() or
+                                    (np.abs(refs[j] - centres[p]) <= spans[p]).all())
+                    assert part_part(p, j) == expected
+            assert asked > 20  # (the draw does reach into bounds)

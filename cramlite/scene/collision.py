@@ -706,8 +706,8 @@ class MotionCheck:
               moving: _ObstaclesByState | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Broadphase for S states: (S x parts x obstacles) parts whose bounds meet an
         obstacle's, and (S x pairs) moving parts whose bounds meet; and the boxes (S x P x 3
-        centres and half spans, axis-aligned) and the points `enclosed` tests (S x P x 3),
-        for `_nested_test`. Bounds are first compared axis-aligned (each part's over all
+        centres and half spans, axis-aligned) and the parts' frames (S x P x 4 x 4), for
+        `_nested_test`. Bounds are first compared axis-aligned (each part's over all
         the states, then state by state), then the pairs that meet so as oriented boxes
         (most of them turn out apart: a narrow test each saved). `moving`: each state's own
         obstacle bounds (a drawer or door that moves along the states)."""
@@ -719,7 +719,6 @@ class MotionCheck:
         gap = pad + BOX_SLACK_M
         axes = rotations @ self._rotations  # S x P x 3 x 3: each part's bounds' axes
         spans = (np.abs(axes) @ self._halves[None, :, :, None])[..., 0] + pad  # S x P x 3
-        refs = (rotations @ self._refs[None, :, :, None])[..., 0] + placed[..., :3, 3]
         near = np.zeros((s, len(self.parts), len(self.obstacles)), dtype=bool)
         # (comparisons laid out x, y, z first: numpy reduces a leading axis of three
         # several times faster than a trailing one)
@@ -766,15 +765,19 @@ class MotionCheck:
                 close = ~boxes_apart(axes[state, a], centres[state, a], self._halves[a],
                                      axes[state, b], centres[state, b], self._halves[b], gap)
                 meets[state[close], pair[close]] = True
-        return near, meets, (centres, spans, refs)
+        return near, meets, (centres, spans, placed)
 
     def _nested_test(self, boxes: tuple[np.ndarray, np.ndarray, np.ndarray],
                      ) -> tuple[Callable[[int, int], bool], Callable[[int, int], bool]]:
-        """For one state's boxes (the parts' centres, half spans and the points `enclosed`
-        tests): may a part and an obstacle, or two parts, lie one wholly inside the other?
-        Only if the point of one that `enclosed` tests lies in the other's box. (Plain
-        floats: asked of a few pairs a state, where array operations cost more.)"""
-        centres, spans, refs = (b.tolist() for b in boxes)
+        """For one state's boxes (the parts' centres, half spans and frames): may a part
+        and an obstacle, or two parts, lie one wholly inside the other? Only if the point
+        of one that `enclosed` tests lies in the other's box (the parts' points placed
+        here: most states need no exact test). (Plain floats: asked of a few pairs a
+        state, where array operations cost more.)"""
+        centres, spans, placed = boxes
+        refs = ((placed[:, :3, :3] @ self._refs[:, :, None])[:, :, 0] +
+                placed[:, :3, 3]).tolist()
+        centres, spans = centres.tolist(), spans.tolist()
         lo, hi, obstacle_refs = self._obstacle_lists()
 
         def within(point: list[float], centre: list[float], span: list[float]) -> bool:
