@@ -72,3 +72,30 @@ def test_libyaml_parses_what_is_read() -> None:
     finally:
         strict_yaml._StrictCLoader.__init__ = original
     assert calls
+
+
+@pytest.mark.parametrize("text", [
+    "a: 1\t# a tab before a comment\n", "a: 1\t\n", "a:\t1\n", "a: [1,\t2]\n", "a: x\ty\n",
+    "grasps: [front, t?op]\n", "{a: b?}\n", "a: !\n", "! : 1\n", "\ufeff\ufeffa: 1\n",
+    "a:\n\ufeff  b\n", "a: >#\n", "a: |#c\n", "a: \ud800\n",
+    "a: " + "[" * 600 + "]" * 600 + "\n",
+])
+def test_text_libyaml_reads_otherwise_is_read_as_the_pure_python_parser_reads_it(
+        text: str) -> None:
+    """(Found by a differential fuzzer: libyaml is more lenient with tabs, `?` in flow
+    scalars, bare tags, byte-order marks and comments after a block scalar's header, and
+    nests flow collections deeper.)"""
+    def outcome(load):
+        try:
+            return "ok", load(text)
+        except (yaml.YAMLError, ValueError, RecursionError) as exc:
+            return "error", type(exc).__name__, str(exc)
+
+    assert outcome(load_strict) == outcome(_python)
+
+
+@pytest.mark.parametrize("text", ["a: !!timestamp x\n", "a: !!int\n"])
+def test_a_value_no_constructor_can_make_is_a_yaml_error(text: str) -> None:
+    """(PyYAML's constructors raise AttributeError or IndexError there: a traceback.)"""
+    with pytest.raises(yaml.YAMLError, match="a value cannot be read"):
+        load_strict(text)

@@ -69,6 +69,9 @@ def _load(path: str, stamp: float) -> ItemType:
         raise SetupError(message, source=str(file), field=where) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise SetupError(f"cannot read it: {exc}", source=str(file)) from None
+    except (ValueError, RecursionError) as exc:  # e.g. an integer of 5,000 digits
+        raise SetupError(f"unusable YAML ({str(exc) or type(exc).__name__})",
+                         source=str(file)) from None
     if raw is None:
         return ItemType(source=file)
     if not isinstance(raw, dict):
