@@ -53,7 +53,7 @@ def test_refused_text_is_refused_in_the_same_words_on_both_parsers(text: str) ->
     assert str(fast.value) == str(slow.value)
 
 
-def test_libyaml_parses_what_is_read() -> None:
+def test_libyaml_parses_what_is_read(monkeypatch: pytest.MonkeyPatch) -> None:
     """The fast parser is the one used where PyYAML has it (its wheels do)."""
     if not getattr(yaml, "__with_libyaml__", False):
         pytest.skip("this PyYAML was built without libyaml")
@@ -66,11 +66,8 @@ def test_libyaml_parses_what_is_read() -> None:
         calls.append(stream)
         original(self, stream)
 
-    strict_yaml._StrictCLoader.__init__ = counting
-    try:
-        assert load_strict("name: v1\nitems: [1, 2]\n") == {"name": "v1", "items": [1, 2]}
-    finally:
-        strict_yaml._StrictCLoader.__init__ = original
+    monkeypatch.setattr(strict_yaml._StrictCLoader, "__init__", counting)
+    assert load_strict("name: v1\nitems: [1, 2]\n") == {"name": "v1", "items": [1, 2]}
     assert calls
 
 

@@ -137,9 +137,7 @@ def load_setup(setup: str | Path) -> Setup:
         content = path.read_bytes()
         data = load_strict(content.decode("utf-8"))
     except yaml.YAMLError as exc:
-        message, where = describe_yaml_error(exc)
-        if message.startswith("malformed"):
-            message += "; expected a YAML mapping"
+        message, where = describe_yaml_error(exc, expected="a YAML mapping")
         raise SetupError(message, source=src, field=where) from None
     except UnicodeDecodeError:
         raise SetupError("not UTF-8 text; expected a setup YAML file", source=src) from None

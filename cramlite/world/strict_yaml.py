@@ -45,7 +45,8 @@ def _mapping_without_duplicates(loader: StrictLoader, node: yaml.MappingNode,
 class _StrictCLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ignore[misc]
     """The same rules on libyaml's parser (PyYAML's wheels ship it): seven times faster
     than the pure-Python one (a setup and its item types: ~40 ms a process). Its scanner
-    is C: anchors and aliases are refused by `_refuse_anchors` before loading."""
+    is C: text with an anchor or alias (`_has_anchors`) is left to `StrictLoader`, which
+    refuses it, before libyaml could expand it."""
 
 
 for _loader in (StrictLoader, _StrictCLoader):
@@ -71,9 +72,8 @@ def load_strict(text: str) -> Any:
         if (getattr(yaml, "__with_libyaml__", False) and not _LIBYAML_DIFFERS.search(text)
                 and text.count("[") + text.count("{") < _FLOW_OPENERS):
             try:
-                if "&" in text or "*" in text:  # (no anchor or alias is written without)
-                    _refuse_anchors(text)
-                return yaml.load(text, Loader=_StrictCLoader)
+                if not _has_anchors(text):
+                    return yaml.load(text, Loader=_StrictCLoader)
             except yaml.YAMLError:
                 pass
         return yaml.load(text, Loader=StrictLoader)
@@ -82,16 +82,20 @@ def load_strict(text: str) -> Any:
             None, None, f"a value cannot be read ({type(exc).__name__}: {exc})") from None
 
 
-def _refuse_anchors(text: str) -> None:
-    """Raise at the first anchor or alias of the text, where `StrictLoader` would."""
-    for event in yaml.parse(text, Loader=_StrictCLoader):
-        if getattr(event, "anchor", None) is not None:  # (an alias names its anchor)
-            raise yaml.scanner.ScannerError(None, None, ALIASES_REFUSED, event.start_mark)
+def _has_anchors(text: str) -> bool:
+    """Has the text an anchor or alias? (Read as libyaml's events, which expand nothing;
+    no anchor or alias is written without `&` or `*`.)"""
+    return ("&" in text or "*" in text) and any(
+        getattr(event, "anchor", None) is not None  # (an alias names its anchor)
+        for event in yaml.parse(text, Loader=_StrictCLoader))
 
 
-def describe_yaml_error(exc: yaml.YAMLError) -> tuple[str, str | None]:
-    """A YAML error as (what is wrong, where: "line N", or None), for a one-line error."""
+def describe_yaml_error(exc: yaml.YAMLError, expected: str = "",
+                        ) -> tuple[str, str | None]:
+    """A YAML error as (what is wrong, where: "line N", or None), for a one-line error;
+    `expected` (what the file should be) follows a malformed file's problem."""
     mark = getattr(exc, "problem_mark", None)
     problem = getattr(exc, "problem", None) or "could not parse"
-    message = f"YAML {problem}" if problem == ALIASES_REFUSED else f"malformed YAML ({problem})"
+    message = f"YAML {problem}" if problem == ALIASES_REFUSED else \
+        f"malformed YAML ({problem}){'; expected ' + expected if expected else ''}"
     return message, (f"line {mark.line + 1}" if mark is not None else None)
