@@ -19,6 +19,7 @@ _EXPORTS = {
     "World": "cramlite.backends.pybullet.world",
     # designators and execution
     "simulated_robot": "cramlite.designators", "RobotContext": "cramlite.designators",
+    "ActionDesignator": "cramlite.designators",
     "ObjectDesignatorDescription": "cramlite.designators",
     "CostmapLocation": "cramlite.designators", "PlacingLocation": "cramlite.designators",
     "NavigateAction": "cramlite.designators", "PickUpAction": "cramlite.designators",

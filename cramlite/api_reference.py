@@ -31,7 +31,7 @@ SECTIONS: list[tuple[str, list[tuple[str, str]]]] = [
             "NavigateAction", "PickUpAction", "PlaceAction", "TransportAction",
             "FetchAction", "DeliverAction", "PickAndPlaceAction", "ParkArmsAction",
             "MoveTorsoAction", "SetGripperAction",
-            "LookAtAction", "DetectAction")] + [
+            "LookAtAction", "DetectAction", "ActionDesignator")] + [
         ("cramlite.designators.storage", "OpenAction"),
         ("cramlite.designators.storage", "CloseAction")]),
     ("Object and location designators", [

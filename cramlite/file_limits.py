@@ -61,5 +61,5 @@ def check_size(size: int, kind: str, source: str,
                error: type[UserInputError] = UserInputError) -> None:
     limit = limit_bytes(kind)
     if size > limit:
-        raise error(f"{size / 2**20:.1f} MB is over the {limit / 2**20:.0f} MB limit for a "
+        raise error(f"{size / 2**20:.1f} MB is over the {round(limit / 2**20, 3):g} MB limit for a "
                     f"{kind} file (set {ENV} to raise it)", source=source)

@@ -84,7 +84,24 @@ def plan_function(name: str, field: str = "--plan") -> Plan:
     if not callable(plan):
         raise UserInputError(f"plan {name!r} is not a function (ctx, setup, strategy) -> "
                              "PlanReport", field=field)
+    _check_signature(name, plan, field)
     return plan
+
+
+def _check_signature(name: str, plan: Plan, field: str) -> None:
+    """A plan is called with three arguments (ctx, setup, strategy): one that cannot take
+    them (a strategy class given as a plan, a function of two arguments) is refused here,
+    in one line, not with a traceback from inside the trial."""
+    try:
+        signature = inspect.signature(plan)
+    except (TypeError, ValueError):  # (a builtin without one: called as it is)
+        return
+    try:
+        signature.bind(None, None, None)
+    except TypeError:
+        what = "a class" if inspect.isclass(plan) else f"a function {signature}"
+        raise UserInputError(f"plan {name!r} is {what}; expected a function (ctx, setup, "
+                             "strategy) -> PlanReport", field=field) from None
 
 
 def is_builtin(name: str) -> bool:

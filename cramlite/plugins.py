@@ -121,7 +121,12 @@ def load_reference(text: str, what: str, field: str) -> Any:
             value = getattr(value, part)
     except AttributeError:
         public = sorted(n for n in vars(module) if not n.startswith("_"))
-        raise UserInputError(f"cannot load {what} {text!r}: {module.__name__} has no "
+        own = [n for n in public  # (what the module defines before what it imports)
+               if getattr(getattr(module, n), "__module__", None) == module.__name__]
+        public = own + [n for n in public if n not in own]
+        # (a file by its path: the module name it is loaded under is cramlite's own)
+        where = str(code_file(text)) if names_file(text) else module.__name__
+        raise UserInputError(f"cannot load {what} {text!r}: {where} has no "
                              f"{attr!r}; it has {', '.join(public[:12]) or 'nothing public'}",
                              field=field) from None
     return value

@@ -296,7 +296,7 @@ def reproduce(options: Options, say: Callable[[str], None] = print) -> list[Sect
             sections.append(section)
 
     timed("fit on table setting", lambda: fit_section(options))
-    timed("robot experiment v1-v5", lambda: robot_section(options))
+    timed(f"robot experiment {', '.join(options.setups)}", lambda: robot_section(options))
     models: dict[str, str] = {}
     try:
         timed("training the RNN, NN and CPT",

@@ -21,7 +21,7 @@ import numpy as np
 from cramlite.backends import Backend, default_backend, load_backend
 from cramlite.designators import ExecutionOptions, PlanFailure, RobotContext
 from cramlite.designators.tasks import time_in
-from cramlite.errors import SetupError
+from cramlite.errors import SetupError, UserInputError
 from cramlite.plan_names import PLAN_NAMES  # noqa: F401  (re-exported)
 from cramlite.plan_registry import is_builtin, plan_function
 from cramlite.plans import PlanReport
@@ -233,8 +233,9 @@ def _as_report(value: Any, plan: str) -> PlanReport:
         return PlanReport()
     if isinstance(value, PlanReport):
         return value
-    raise TypeError(f"plan {plan!r} returned {type(value).__name__}; expected a PlanReport "
-                    "(from cramlite import PlanReport) or None")
+    raise UserInputError(f"plan {plan!r} returned {type(value).__name__}; expected a "
+                         "PlanReport (from cramlite import PlanReport) or None",
+                         field="--plan")
 
 
 def run_trial(setup: Setup | str, strategy: str = "baseline", plan: str = "set-table",

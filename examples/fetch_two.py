@@ -52,6 +52,8 @@ def fetch_two(ctx: RobotContext, setup: Setup, strategy: Strategy) -> PlanReport
         remaining.remove(chosen.name)
         report.order.append(chosen.name)
         target = targets[chosen.name]
+        # (the straight legs robot -> item -> target, as the built-in plans report them)
+        report.add_leg(robot_position(ctx)[:2], chosen.position[:2], target.xyz[:2])
         try:
             LookAtAction(chosen.name).perform(ctx)  # (the head turns to it first)
             TransportAction(chosen.name, target=target.xyz, target_yaw=target.yaw).perform(ctx)

@@ -125,3 +125,12 @@ def test_the_command_reference_is_what_the_parsers_say() -> None:
 def test_readme_points_to_the_reference_and_global_options() -> None:
     text = (ROOT / "README.md").read_text()
     assert "docs/commands.md" in text and "--help" in text and "python -m cramlite" in text
+
+
+@pytest.mark.parametrize("args", [["run", "v1", "--stratgy", "opm"], ["strategies", "--x"],
+                                  ["run", "v1", "extra"]])
+def test_an_unknown_option_is_named_with_its_command(args: list[str]) -> None:
+    done = run_cli(*args)
+    assert done.returncode == 2
+    assert done.stderr.strip() == f"cramlite {args[0]}: error: unrecognized arguments: " \
+                                  f"{' '.join(args[2:] if args[0] == 'run' else args[1:])}"

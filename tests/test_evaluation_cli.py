@@ -120,6 +120,13 @@ def test_evaluate_prints_its_summary_and_the_episodes_only_when_asked() -> None:
     assert len(full.stdout.strip().splitlines()) >= 186 + 4
 
 
+def test_a_misspelt_data_set_lists_the_shipped_ones() -> None:
+    done = run_cli("evaluate", "table-setings")
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert "table-setings: no such file; expected a CSV file of recorded sequences or a " \
+           "shipped set: table-setting, cooking, clearing-up, all" in done.stderr, done.stderr
+
+
 @pytest.mark.parametrize(("name", "episodes", "activity"), [
     ("cooking", 123, "cooking"), ("clearing-up", 17, "cleaning up"), ("all", 326, None)])
 def test_the_shipped_subsets_load_by_name(name: str, episodes: int, activity) -> None:

@@ -52,7 +52,7 @@ def test_size_limits_name_the_file_and_how_to_raise_them(tmp_path) -> None:
         return subprocess.run([sys.executable, "-m", "cramlite", *args], capture_output=True,
                               text=True, cwd=ROOT, env=env, timeout=60)
 
-    _one_line(cli("evaluate", str(big)), str(big), "over the 0 MB limit",
+    _one_line(cli("evaluate", str(big)), str(big), "over the 0.01 MB limit",
               "CRAMLITE_MAX_FILE_MB")
     bad = {**env, "CRAMLITE_MAX_FILE_MB": "lots"}
     result = subprocess.run([sys.executable, "-m", "cramlite", "evaluate", str(big)],

@@ -110,6 +110,8 @@ def test_page_shows_every_setup_strategy_order_and_failure_offline(bench_dir: Pa
     assert len(gifs) == 1 and "replay not drawn" in plain
     for strategy in STRATEGIES:
         assert strategy in plain
+    # robot time as the summary files define it: the robot's own, without the host's time
+    assert "Robot time: the robot's own time" in plain and "Robot time = wall" not in plain
 
 
 def test_driven_path_column_follows_the_executed_path(bench_dir: Path) -> None:

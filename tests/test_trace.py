@@ -47,6 +47,7 @@ GOOD_STATE = {"t": 0.0, "base": [0, 0, 0], "q": [0.25, -1.7], "w": [], "held": {
 
 @pytest.mark.parametrize("lines, line, expected", [
     ([], None, "empty file"),
+    ([header(format=TRACE_FORMAT)], 2, "no states after the header"),
     (["{not json"], 1, "not valid JSON"),
     ([{"format": "other/1"}], 1, "cramlite-trace/1"),
     ([{"format": TRACE_FORMAT, "setup": "v1"}], 1, "header misses"),

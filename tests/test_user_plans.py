@@ -35,6 +35,7 @@ def test_the_examples_run_a_plan_and_a_strategy_from_files() -> None:
     assert result["order"][0] == "cup"
     names = [a["name"] for a in result["actions"]]
     assert "OpenAction" in names and "CloseAction" in names  # (drawer_1, looked into)
+    assert result["straight_line_m"] > 1.0  # (the example reports its legs)
     setup = run_cli("run", str(EXAMPLES / "breakfast_for_one.yaml"), "--strategy", "opm",
                     "--backend", "kinematic", "--json")
     assert setup.returncode == 0, setup.stderr
@@ -85,7 +86,9 @@ def test_a_strategy_module_in_the_current_folder_loads_without_pythonpath(
 @pytest.mark.parametrize(("plan", "expected"), [
     ("nope", "unknown plan 'nope'; expected one of set-table, clear-table"),
     ("./missing.py:plan", "no such file"),
-    (f"{EXAMPLES / 'fetch_two.py'}:fetch_three", "has no 'fetch_three'; it has"),
+    (f"{EXAMPLES / 'fetch_two.py'}:fetch_three",
+     f"{EXAMPLES / 'fetch_two.py'} has no 'fetch_three'; it has fetch_two, "),
+    (FARTHEST, "is a class; expected a function (ctx, setup, strategy)"),
     ("json:dumps_nothing", "has no 'dumps_nothing'"),
 ])
 def test_a_plan_that_cannot_load_is_one_line_and_exit_2(plan: str, expected: str) -> None:
@@ -95,6 +98,19 @@ def test_a_plan_that_cannot_load_is_one_line_and_exit_2(plan: str, expected: str
         assert expected in done.stderr and "--plan" in done.stderr, done.stderr
         assert "Traceback" not in done.stderr
     assert not Path("/tmp/never/trials.csv").exists()
+
+
+def test_a_plan_of_the_wrong_shape_is_one_line_and_exit_2(tmp_path: Path) -> None:
+    (tmp_path / "shapes.py").write_text("def two(ctx, setup):\n    pass\n\n\n"
+                                        "def number(ctx, setup, strategy):\n    return 42\n")
+    for plan, expected in (("two", "is a function (ctx, setup); expected a function (ctx, "
+                                   "setup, strategy) -> PlanReport"),
+                           ("number", "returned int; expected a PlanReport")):
+        done = run_cli("run", "v1", "--plan", f"{tmp_path / 'shapes.py'}:{plan}", "--backend",
+                       "kinematic")
+        assert done.returncode == 2, done.stderr
+        assert expected in done.stderr and "--plan" in done.stderr, done.stderr
+        assert "Traceback" not in done.stderr and len(done.stderr.splitlines()) == 1
 
 
 def test_a_plan_that_raises_on_import_is_named(tmp_path: Path) -> None:

@@ -58,7 +58,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
         parser = build_parser(argv)
-        args = parser.parse_args(argv)
+        args, unknown = parser.parse_known_args(argv)
+        if unknown:  # (told by the command's parser, so the message names the command)
+            _command_parser(parser, args.command).error(
+                f"unrecognized arguments: {' '.join(unknown)}")
         func: Callable[[argparse.Namespace], int] = args.func
         return func(args)
     except UserInputError as exc:
@@ -73,6 +76,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # e.g. `cramlite order ... | head -c 10`: end quietly
         _silence_stdout()
         return EXIT_BROKEN_PIPE
+
+
+def _command_parser(parser: argparse.ArgumentParser, command: str,
+                    ) -> argparse.ArgumentParser:
+    """The parser of `command` (the top-level one if there is none)."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction) and command in action.choices:
+            return action.choices[command]
+    return parser
 
 
 def one_line(text: str) -> str:

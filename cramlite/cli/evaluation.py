@@ -260,7 +260,8 @@ def add_protocol_argument(p: argparse.ArgumentParser) -> None:
     p.add_argument("--protocol", default="heldout", choices=PROTOCOLS,
                    help="heldout (default): cramlite's conventions, a learned model scored on "
                         "its test episodes only; thesis: as behind the published figures; "
-                        "reference: the published OPM code's conventions (see README)")
+                        "reference: the published OPM code's conventions (see "
+                        "docs/evaluation.md, Protocols)")
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -122,7 +122,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     replay.add_argument("--fps", default=10.0,
                         type=float_in_range(0, 120, "frames per second > 0 and <= 120",
                                             open_minimum=True),
-                        help="frames per second of robot time (default 10)")
+                        help="frames per second of the GIF as it plays (default 10); with "
+                             "--speed S a frame shows S/fps s of robot time")
     replay.add_argument("--speed", default=1.0,
                         type=float_in_range(0.01, 1000, "a speed-up from 0.01 to 1000"),
                         help="play this many times faster than the robot moved (default 1)")

@@ -50,11 +50,12 @@ from cramlite.designators.motions import (
 )
 from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription
 from cramlite.designators.perception import DetectAction
+from cramlite.designators.tasks import ActionDesignator
 
 __all__ = [
-    "AttachMotion", "CostmapLocation", "DetachMotion", "ExecutionOptions", "GraspFailed",
-    "IKFailed", "MotionPlanningFailed", "MoveArmJointsMotion", "MoveGripperMotion", "MoveMotion",
-    "MoveTCPMotion",
+    "ActionDesignator", "AttachMotion", "CostmapLocation", "DetachMotion", "ExecutionOptions",
+    "GraspFailed", "IKFailed", "MotionPlanningFailed", "MoveArmJointsMotion", "MoveGripperMotion",
+    "MoveMotion", "MoveTCPMotion",
     "MoveTorsoAction",
     "MoveTorsoMotion", "NavigateAction", "NavigationFailed", "NoPathFound", "ObjectDesignator",
     "ObjectDesignatorDescription", "ObjectNotFound", "ObjectUnreachable", "ParkArmsAction",

@@ -184,6 +184,11 @@ def iter_rows(path: str | Path) -> Iterator[dict[str, str]]:
     checked_file(path, "data", DataError)
     try:
         raw = path.read_bytes()
+    except FileNotFoundError:
+        from cramlite.resources import SHIPPED_DATA
+
+        raise DataError("no such file; expected a CSV file of recorded sequences or a shipped "
+                        f"set: {', '.join(SHIPPED_DATA)}", source=str(path)) from None
     except OSError as exc:
         raise DataError(f"cannot read file ({exc.strerror})", source=str(path)) from None
     try:

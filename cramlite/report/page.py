@@ -249,8 +249,12 @@ def _summary(data: PageData) -> str:
         return '<h2 id="summary">Summary</h2><p class="note">No trials of a strategy yet.</p>'
     return ('<h2 id="summary">Summary</h2><table>' + head + "".join(body) + "</table>"
             '<p class="note">Times, paths and distances are means (and medians) over the '
-            "successful trials. Robot time = wall time (planning and simulation) + driving "
-            "time (base at 1.0 m/s, 1 rad/s) + arm time (arm, torso and gripper motion). "
+            "successful trials. Robot time: the robot's own time, from the plan's start to "
+            "the end of its last motion (driving and arm motions, less the time both move "
+            "at once), deterministic for a seed; the host's time to plan and execute it is "
+            "not in it. Driving: base trajectories at up to 1 m/s and 1 rad/s, accelerating "
+            "at 1 m/s² and 1.5 rad/s²; arm: arm, torso and gripper motion timed from the "
+            "URDF's limits. "
             "Driven path: length of the base paths actually executed; straight-line: sum of "
             "the straight legs robot → item → target. Edit distance: normalised "
             "Damerau-Levenshtein distance of the most frequent order to the setup's baseline "

@@ -173,6 +173,9 @@ def read_trace(path: str | Path) -> Trace:
             raise TraceError("not UTF-8 text; expected JSON Lines", source=src) from None
     if header is None:
         raise TraceError(f"empty file; expected a {TRACE_FORMAT} header line", source=src)
+    if not states:  # (a trace is written with the robot's first state: this one was cut)
+        raise TraceError("no states after the header; expected at least the robot's state "
+                         "at t = 0 (a trace cut short?)", source=src, field="line 2")
     return Trace(header, states)
 
 
