@@ -43,9 +43,25 @@ def code_file(text: str) -> Path | None:
 
 
 def file_hash(text: str) -> str:
-    """A short hash of the content of the file a reference names ("" for a module)."""
-    path = code_file(text)
+    """A short hash of the content of the file a reference names, or of the module's
+    source file for `module:name` ("" if there is none to read): a changed plan or
+    strategy is a new one, whichever way it is named."""
+    path = code_file(text) if names_file(text) else _module_file(text)
     return file_digest(path) if path is not None and path.is_file() else ""
+
+
+def _module_file(text: str) -> Path | None:
+    """The source file of the module a `module:name` reference names (looked for in the
+    current folder as `_import` does, if Python cannot find it), or None."""
+    local = absolute_reference(text, Path.cwd())
+    if names_file(local):
+        return code_file(local)
+    try:
+        spec = importlib.util.find_spec(text.rpartition(":")[0])
+    except (ImportError, ValueError):
+        return None
+    origin = getattr(spec, "origin", None)
+    return Path(origin) if origin and origin.endswith(".py") else None
 
 
 def absolute_reference(text: str, folder: str | Path) -> str:

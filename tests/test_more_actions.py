@@ -110,3 +110,27 @@ def test_look_at_turns_the_head_the_short_way_across_its_back() -> None:
         near = (x + 0.4 * math.cos(yaw + math.pi / 2), y + 0.4 * math.sin(yaw + math.pi / 2),
                 0.7)
         assert gaze_error_deg(ctx, LookAtAction(near).perform(ctx)) < 0.01
+
+
+def test_a_place_with_nothing_under_it_is_refused_before_anything_moves() -> None:
+    from cramlite.designators import PlacementFailed, TransportAction
+
+    with simulated_robot(load_setup("v1"), backend="kinematic") as robot:
+        for target in ((-0.9, 1.3, 1.3), (-0.9, 1.3, 0.6), (5.0, 5.0, 0.86)):  # air, in, off
+            with pytest.raises(PlacementFailed, match="rests on nothing"):
+                TransportAction("cup", target=target).perform(robot)
+        assert robot.time_s == 0.0 and not robot.holding  # (refused before any motion)
+
+
+def test_a_container_opened_for_an_item_not_taken_out_is_closed_again() -> None:
+    from cramlite.designators import ObjectUnreachable, TransportAction
+
+    with simulated_robot(load_setup("c1"), backend="kinematic") as robot:
+        fridge = robot.scene.surface("fridge")  # (a surface no hand puts the spoon on)
+        top = ((fridge.x_min + fridge.x_max) / 2, (fridge.y_min + fridge.y_max) / 2,
+               fridge.top_z)
+        with pytest.raises(ObjectUnreachable):
+            TransportAction("spoon", target=top).perform(robot)  # (it is in drawer_1)
+        names = [node["name"] for node in robot.tasks.as_list()[0]["children"]]
+        assert "OpenAction" in names and "CloseAction" in names, names
+        assert robot.opened == [] and robot.scene.world_joint_positions()["drawer_1_joint"] == 0

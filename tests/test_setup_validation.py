@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import run_cli
+from tests.conftest import ROOT, run_cli
 
 
 def _write(tmp_path: Path, text: str) -> Path:
@@ -190,6 +190,22 @@ def test_impossible_setups_are_refused_at_load(tmp_path: Path, setup_text: str, 
     _assert_user_error(run_cli("show", str(path), "--out", str(tmp_path / "x.png")),
                        str(path), *fragments)
     assert not (tmp_path / "x.png").exists()
+
+
+def test_a_target_needs_something_under_it_wherever_its_item_starts(tmp_path: Path) -> None:
+    c1 = (ROOT / "worlds" / "setups" / "c1.yaml").read_text()
+    spoon_target = "target: [-0.85, 1.0, 0.86, 0.0]"  # (the spoon starts in drawer_1)
+    assert spoon_target in c1
+    for target, why in (("[-0.85, 1.0, 1.5, 0.0]", "in the air"),
+                        ("[5.0, 5.0, 0.86, 0.0]", "rests on no surface")):
+        path = _write(tmp_path, c1.replace(spoon_target, f"target: {target}", 1))
+        _assert_user_error(run_cli("show", str(path), "--out", str(tmp_path / "x.png")),
+                           str(path), "items[0].target", why)
+    # a target on a drawer's bottom (given as it is closed) has something under it
+    into_drawer = c1.replace(spoon_target, "target: [1.45, -0.62, 0.6, 0.0]", 1)
+    done = run_cli("show", str(_write(tmp_path, into_drawer)), "--out",
+                   str(tmp_path / "y.png"))
+    assert done.returncode == 0, done.stderr
 
 
 @pytest.mark.parametrize(("urdf", "fragments"), [

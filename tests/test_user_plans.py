@@ -215,3 +215,33 @@ def test_load_reference_names_what_is_missing() -> None:
     assert load_reference("json:dumps", "plan", "--plan") is json.dumps
     with pytest.raises(UserInputError, match="expected plan as package.module:name"):
         load_reference("json", "plan", "--plan")
+
+
+def test_a_plan_named_as_a_module_is_keyed_by_its_file_s_content(tmp_path: Path,
+                                                                 monkeypatch) -> None:
+    from cramlite.plugins import trial_code_hash
+
+    monkeypatch.chdir(tmp_path)  # (a module of the current folder, as the tutorial runs it)
+    (tmp_path / "my_fixed_plan.py").write_text("def plan(ctx, setup, strategy):\n    pass\n")
+    first = trial_code_hash("my_fixed_plan:plan", "opm")
+    (tmp_path / "my_fixed_plan.py").write_text("def plan(ctx, setup, strategy):\n    return\n")
+    second = trial_code_hash("my_fixed_plan:plan", "opm")
+    assert first and second and first != second
+    # an importable module's source file, as well
+    assert trial_code_hash("json:dumps", "opm") == trial_code_hash("json:loads", "opm") != ""
+
+
+def test_a_folder_with_several_versions_of_a_plan_labels_each_apart() -> None:
+    from cramlite.bench.labels import base_name, by_backend
+    from cramlite.bench.summary import summarise
+
+    rows = [{"setup": "v1", "strategy": "opm", "plan": "./p.py:plan", "code_hash": code,
+             "backend": "kinematic", "carry": 1, "success": "True", "robot_time_s": time,
+             "order": "cup milk"} for code, time in (("aaaa1111bbbb", 10.0),
+                                                     ("cccc2222dddd", 20.0))]
+    labelled = by_backend(rows)
+    assert [r["strategy"] for r in labelled] == ["opm~aaaa1111", "opm~cccc2222"]
+    assert {base_name(r["strategy"]) for r in labelled} == {"opm"}
+    summary = summarise(labelled, {"v1": ("cup", "milk")})
+    assert sorted(e["robot_time_s_mean"] for e in summary) == [10.0, 20.0]  # (not mixed)
+    assert [r["strategy"] for r in by_backend(rows[:1])] == ["opm"]  # one version: no mark

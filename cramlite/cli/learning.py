@@ -121,8 +121,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
 def register(sub: argparse._SubParsersAction) -> None:
     train = sub.add_parser("train", help=command_help("train"),
                            description="Trains on the episodes of a file in the published "
-                                       "format; writes MODEL, MODEL.report.json and "
-                                       "MODEL.loss.png. Needs the learn extra.")
+                                       "format; writes MODEL, MODEL.report.json and (the "
+                                       "RNN and NN, trained by epochs) MODEL.loss.png. Needs "
+                                       "the learn extra.")
     train.add_argument("data", help="CSV of recorded sequences, or a shipped set: table-setting, "
                                     "cooking, clearing-up, all")
     train.add_argument("--model", required=True, choices=MODEL_KINDS,

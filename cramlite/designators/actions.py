@@ -65,6 +65,17 @@ PARKED_TOLERANCE_RAD = 1e-3
 FOOTPRINT_SPACING_M = 0.01
 
 
+def check_resting_place(ctx: RobotContext, obj: str, point: Vec3) -> None:
+    """A place given for an object's bottom centre must have something under it to stand
+    on: the top of a surface, or the bottom of a drawer or cupboard (PlacementFailed if
+    not: in the air, off an edge, below the floor; no backend would keep it there)."""
+    if ctx.scene.support_under(point, RESTING_HEIGHT_TOLERANCE_M) is None:
+        x, y, z = point
+        raise PlacementFailed(f"the place ({x:.2f}, {y:.2f}, {z:.2f}) rests on nothing (in the "
+                              "air, off an edge or below the floor); expected the top of a "
+                              "surface or the bottom of a drawer or cupboard under it", obj=obj)
+
+
 @dataclass
 class ParkArmsAction(ActionDesignator):
     """Get the arms ready for driving, one after the other: an empty arm tucked (PyCRAM's
@@ -256,6 +267,8 @@ class PlaceAction(ActionDesignator):
         arm = next((a for a, h in ctx.holding.items() if h.obj == obj.name), None)
         if arm is None:
             raise PlacementFailed("not held", obj=obj.name)
+        if self.reach is None:  # (a location designator's spots stand on a surface)
+            check_resting_place(ctx, obj.name, self.target)
         holding = ctx.holding[arm]
         reach = self.reach or self._resolve(ctx, arm, holding)
         MoveArmJointsMotion(reach.pre_joints).perform(ctx)
@@ -316,6 +329,8 @@ class TransportAction(ActionDesignator):
         )
 
         obj = as_object(self.object, ctx)
+        if self.target is not None:  # (before anything moves)
+            check_resting_place(ctx, obj.name, self.target)
         ParkArmsAction().perform(ctx)
         source = container_of(ctx, obj.name)
         if source is not None and not is_open(ctx, source):
@@ -330,7 +345,14 @@ class TransportAction(ActionDesignator):
         origin, _ = obj.pose(ctx)
         closed = destination if destination is not None and not is_open(ctx, destination) \
             else None
-        picked_from, planned = self._fetch(ctx, obj, target, closed, local)
+        try:
+            picked_from, planned = self._fetch(ctx, obj, target, closed, local)
+        except PlanFailure:
+            # not taken out: its drawer or cupboard is not left open in the way of the
+            # next transport (closed as after a fetch; a failure to close is noted)
+            if source is not None and not ctx.options.keep_containers_open:
+                _closed_now(ctx, CloseAction, source)
+            raise
         # the item is out: close its container again (with the free hand; if that hand
         # cannot, once the item is delivered)
         to_close = [] if source is None or ctx.options.keep_containers_open else [source]

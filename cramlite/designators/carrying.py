@@ -17,6 +17,7 @@ from cramlite.designators.actions import (
     TransportAction,
     Vec3,
     _closed_now,
+    check_resting_place,
 )
 from cramlite.designators.context import RobotContext
 from cramlite.designators.failures import PlacementFailed, PlanFailure
@@ -87,6 +88,8 @@ class DeliverAction(TransportAction):
         obj = as_object(self.object, ctx)
         if not any(h.obj == obj.name for h in ctx.holding.values()):
             raise PlacementFailed("not in hand: fetch it first", obj=obj.name)
+        if self.target is not None:
+            check_resting_place(ctx, obj.name, self.target)
         ParkArmsAction().perform(ctx)
         fetched = self.fetched if self.fetched is not None and \
             self.fetched.obj == obj.name else None

@@ -317,10 +317,31 @@ class PlanningScene:
 
     def surface_under(self, x: float, y: float, z: float, tolerance: float) -> Surface | None:
         """The surface (not the floor) whose top is at z (within `tolerance`) under x, y."""
-        for name in self.surfaces():
-            surf = self.surface(name)
+        # (the surfaces as they stand with the drawers and doors where they are now, kept)
+        key = ("surfaces", tuple(sorted(self.belief.world_joints.items())))
+        surfaces = self.cache.get(key)
+        if surfaces is None:
+            surfaces = self.cache[key] = [self.surface(name) for name in self.surfaces()]
+        for surf in surfaces:
             if surf.contains_xy(x, y) and abs(z - surf.top_z) <= tolerance:
                 return surf
+        return None
+
+    def support_under(self, point: Sequence[float], tolerance: float) -> str | None:
+        """What an item whose bottom centre is at `point` would stand on: a surface whose
+        top is there (within `tolerance`), or a container whose inside bottom is there
+        (with the container where it is now, or closed: how places in drawers are given);
+        None if nothing (in the air, off an edge, below the floor)."""
+        x, y, z = (float(v) for v in point)
+        surface = self.surface_under(x, y, z, tolerance)
+        if surface is not None:
+            return surface.name
+        for container in self.containers.values():
+            for joints in (None, {container.joint: 0.0}):
+                local = self._inside_local(container, (x, y, z), joints)
+                if self._within(container, local) and \
+                        abs(local[2] - container.inside_min[2]) <= tolerance:
+                    return container.name
         return None
 
     def moving_links(self) -> set[str]:

@@ -43,6 +43,13 @@ def check_setup(scene: PlanningScene) -> None:
     surfaces = scene.surfaces()
     for i, spec in enumerate(setup.items):
         where = f"items[{i}]"
+        target = spec.target  # (wherever the item starts: a target needs something under it)
+        if scene.support_under(target.xyz, SURFACE_HEIGHT_TOLERANCE_M) is None:
+            raise fail(f"{where}.target",
+                       f"target of {spec.name!r} at {list(target.xyz)} rests on no "
+                       f"surface (in the air, off the edge or below the floor); expected "
+                       f"z = the top of a surface under it (one of {', '.join(surfaces)}) "
+                       "or the bottom of a drawer or cupboard it is in")
         if spec.container is not None:
             _check_in_container(scene, spec, src, where)
             continue
@@ -57,13 +64,6 @@ def check_setup(scene: PlanningScene) -> None:
                        f"{spec.surface!r}; expected x in [{surf.x_min:.2f}, "
                        f"{surf.x_max:.2f}], y in [{surf.y_min:.2f}, {surf.y_max:.2f}], "
                        f"z = {surf.top_z:.2f}")
-        target = spec.target
-        if scene.surface_under(target.x, target.y, target.z,
-                               SURFACE_HEIGHT_TOLERANCE_M) is None:
-            raise fail(f"{where}.target",
-                       f"target of {spec.name!r} at {list(target.xyz)} rests on no "
-                       f"surface (in the air, off the edge or below the floor); expected "
-                       f"z = the top of one of {', '.join(surfaces)} under it")
     _check_robot_start(scene, collisions, fail)
     kitchen = [(s, p) for s, p in scene.kitchen_shapes() if s.link != FLOOR_LINK]
     robot = _robot_parked(scene)
