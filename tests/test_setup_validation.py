@@ -309,6 +309,9 @@ def test_a_setup_hash_covers_the_file_and_its_urdfs(tmp_path: Path, setup_text: 
     (lambda t: t.replace("  drawer_2:", "  drawer_1:", 1), ("line 4", "'drawer_1' appears twice")),
     (lambda t: t.replace("containers:", "containers: &all", 1), ("line 2", "anchors and aliases")),
     (lambda t: t.replace("  cupboard: {", "  cupboard: {{", 1), ("line", "malformed YAML")),
+    (lambda t: t.replace('"open": 0.35}', '"open": 5.0}', 1),
+     ("containers.drawer_1.open", "open 5 is outside its joint's limits; expected a value "
+      "from 0 to 0.35")),
 ])
 def test_a_containers_file_is_read_by_the_setups_rules_and_refused_in_one_line(
         tmp_path: Path, setup_text: str, change, fragments) -> None:

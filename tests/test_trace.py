@@ -10,7 +10,7 @@ import pytest
 
 from cramlite.trace import TRACE_FORMAT, TraceError, TraceWriter, read_trace
 from cramlite.trace.replay import frame_count
-from tests.conftest import run_cli
+from tests.conftest import ROOT, run_cli
 
 JOINTS = ["torso_lift_joint", "r_shoulder_pan_joint"]
 OBJECTS = {"cup": [1.45, 0.85, 0.85, 0.0, 0.0, 0.0, 1.0]}
@@ -224,3 +224,33 @@ def test_an_object_the_setup_lacks_is_malformed_and_a_zero_quaternion_a_finding(
     result = run_cli("replay", str(ghost), "--check")
     assert result.returncode == 1 and "quaternion has norm 0" in result.stdout
     assert "Warning" not in result.stderr, result.stderr
+
+
+def test_run_refuses_to_write_its_trace_over_its_own_setup_or_plan(tmp_path: Path) -> None:
+    setup = tmp_path / "mine.yaml"
+    setup.write_text((ROOT / "worlds" / "setups" / "v1.yaml").read_text())
+    plan = tmp_path / "plan.py"
+    plan.write_text("def plan(ctx, setup, strategy):\n    pass\n")
+    for trace, what in ((setup, "setup file"), (plan, "plan file")):
+        before = trace.read_text()
+        done = run_cli("run", str(setup), "--plan", f"{plan}:plan", "--backend", "kinematic",
+                       "--trace", str(trace))
+        assert done.returncode == 2, done.stderr
+        assert f"--trace: is the {what} this command reads" in done.stderr, done.stderr
+        assert trace.read_text() == before
+
+
+def test_a_trace_is_not_checked_against_a_setup_changed_since(tmp_path: Path) -> None:
+    setup = tmp_path / "mine.yaml"
+    text = (ROOT / "worlds" / "setups" / "v1.yaml").read_text()
+    setup.write_text(text)
+    trace = tmp_path / "t.jsonl"
+    done = run_cli("run", str(setup), "--backend", "kinematic", "--trace", str(trace),
+                   "--plan", "set-table", "--order", "cup,milk,bowl,spoon,breakfast-cereal")
+    assert done.returncode == 0, done.stderr
+    assert run_cli("replay", str(trace), "--check").returncode == 0
+    setup.write_text(text.replace("type: cup ", "type: breakfast-cereal ", 1))
+    for args in (["--check"], ["--out", str(tmp_path / "t.gif")]):
+        changed = run_cli("replay", str(trace), *args)
+        assert changed.returncode == 2, changed.stderr
+        assert "has changed since this trace was written" in changed.stderr, changed.stderr

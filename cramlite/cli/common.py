@@ -8,8 +8,9 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from cramlite.errors import UserInputError
@@ -188,13 +189,22 @@ CARRY_HELP = ("how many items the set-table and clear-table plans carry at once:
               "cupboard, or bound for them, are carried alone); a plan option, default 1")
 
 
-def writable_file(text: str, option: str) -> None:
+def writable_file(text: str, option: str,
+                  inputs: Sequence[tuple[str, str | Path | None]] = ()) -> None:
     """Refuse, before any work, a file that could not be written at the end: a folder, a
-    path under a file, a read-only place (its folders are made)."""
+    path under a file, a read-only place (its folders are made), or one of the command's
+    own `inputs` ((what, path): the setup file, the plan file...), which it would
+    overwrite."""
     target = Path(text)
     if target.is_dir():
         raise UserInputError("is a folder; expected the name of a file to write",
                              source=text, field=option)
+    for what, path in inputs:
+        if path is not None and Path(path).is_file() and target.is_file() and \
+                os.path.samefile(path, target):
+            raise UserInputError(f"is the {what} this command reads; expected another file "
+                                 "to write (it would be overwritten)", source=text,
+                                 field=option)
     under = next((parent for parent in target.parents if parent.is_file()), None)
     if under is not None:
         raise UserInputError(f"is under a file ({under}); expected a file in a folder",

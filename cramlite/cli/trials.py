@@ -115,9 +115,13 @@ def cmd_run(args: argparse.Namespace) -> int:
     from cramlite.designators.injection import parse_inject
 
     inject = parse_inject(args.inject)
+    from cramlite.plugins import code_file
+
+    inputs = [("setup file", setup.source), ("plan file", code_file(args.plan)),
+              ("strategy file", code_file(args.strategy))]
     for path, option in ((args.trace, "--trace"), (args.image, "--image")):
         if path:
-            writable_file(path, option)
+            writable_file(path, option, inputs)
     from cramlite.designators.context import ExecutionOptions
 
     options = ExecutionOptions(keep_containers_open=args.keep_open)

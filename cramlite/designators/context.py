@@ -521,6 +521,7 @@ class RobotContext:
         return {"setup": setup, "plan": plan, "strategy": strategy, "seed": seed,
                 "joints": self.trace_joints, "world_joints": list(self.scene.kitchen.joints),
                 "backend": backend, "cramlite": __version__,
+                "setup_hash": self.scene.setup.content_hash,
                 "robot": {"urdf": str(robot.urdf), "sha256": file_digest(robot.urdf),
                           "joint_limits": {n: [j.lower if math.isfinite(j.lower) else None,
                                                j.upper if math.isfinite(j.upper) else None,

@@ -136,9 +136,9 @@ class TraceFrames:
 
 
 def _setup(trace) -> Setup:
-    from cramlite.world.setup import load_setup
+    from cramlite.trace.format import trace_setup
 
-    return load_setup(trace.header["setup"])
+    return trace_setup(trace)
 
 
 def save_image(image: np.ndarray, path: str | Path) -> Path:

@@ -153,6 +153,13 @@ class PlanningScene:
             if container.joint not in self.kitchen.joints:
                 raise SetupError(f"container {container.name!r}: the world has no movable "
                                  f"joint {container.joint!r}", source=src)
+            joint = self.kitchen.joints[container.joint]
+            if not joint.lower <= container.open_value <= joint.upper:
+                raise SetupError(f"container {container.name!r}: open {container.open_value:g} "
+                                 f"is outside its joint's limits; expected a value from "
+                                 f"{joint.lower:g} to {joint.upper:g} ({container.joint!r} in "
+                                 "the world's URDF)", source=src,
+                                 field=f"containers.{container.name}.open")
 
     # -- the belief ----------------------------------------------------------------------
     @property

@@ -28,7 +28,6 @@ from typing import Any
 
 import numpy as np
 
-from cramlite.errors import UserInputError
 from cramlite.scene.geometry import (
     PointGrid,
     point_triangle_distances,
@@ -40,9 +39,9 @@ from cramlite.scene.geometry import (
 from cramlite.scene.models import BOX, MESH, Shape, item_model, kitchen_model, pr2_model
 from cramlite.scene.scene import FLOOR_LINK
 from cramlite.scene.transforms import inverse, planar, pose_matrix
-from cramlite.trace.format import Trace, TraceError
+from cramlite.trace.format import Trace, TraceError, trace_setup
 from cramlite.world.containers import load_containers
-from cramlite.world.setup import Setup, load_setup
+from cramlite.world.setup import Setup
 
 #: Spacing of the surface points by which penetration is measured.
 SPACING_M = 0.007
@@ -394,10 +393,7 @@ class TraceChecker:
 
 def checker_for(trace: Trace) -> TraceChecker:
     """A checker of the trace's setup (its header names it as `load_setup` accepts)."""
-    try:
-        setup = load_setup(trace.header["setup"])
-    except UserInputError as exc:
-        raise TraceError(f"header field setup: {exc}", field="line 1") from None
+    setup = trace_setup(trace)
     robot = pr2_model()
     missing = [n for n in trace.header["joints"] if n not in robot.joints]
     world = kitchen_model(setup.world_urdf)

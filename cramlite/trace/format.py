@@ -6,7 +6,8 @@ Line 1 is a header:
      "world_joints": [the world's movable joints, order of "w"],
      "backend": what executed it, "cramlite": the version that wrote it,
      "robot": {"urdf": path, "sha256": ..., "joint_limits": {name: [lower, upper,
-               velocity]}}}
+               velocity]}}, "setup_hash": the setup's content hash (a replay of a setup
+     changed since is refused)}
 then one line per executed state, in order:
     {"t": robot time since the plan started (s, non-decreasing), "base": [x, y, yaw],
      "q": [...], "w": [...], "held": {object: arm},
@@ -38,7 +39,7 @@ TRACE_FORMAT = "cramlite-trace/2"
 READ_FORMATS = ("cramlite-trace/1", TRACE_FORMAT)
 HEADER_KEYS = ("format", "setup", "plan", "strategy", "seed", "joints", "world_joints")
 #: What /2 adds to the header (optional on reading: /1 has none of them).
-HEADER_KEYS_2 = ("backend", "cramlite", "robot", "base_limits")
+HEADER_KEYS_2 = ("backend", "cramlite", "robot", "base_limits", "setup_hash")
 STATE_KEYS = ("t", "base", "q", "w", "held", "objects", "action")
 #: The arms that can hold an object in a trace (the PR2's).
 HELD_BY = ("left", "right")
@@ -215,6 +216,9 @@ def _check_header_2(record: dict[str, Any], fail) -> None:
                 for v in limits.values()):
             raise fail("header field robot: expected {\"urdf\": ..., \"joint_limits\": "
                        "{name: [lower, upper, velocity]}} (numbers, or null for none)")
+    digest = record.get("setup_hash")
+    if digest is not None and not (isinstance(digest, str) and 0 < len(digest) <= 64):
+        raise fail("header field setup_hash: expected the setup's content hash (text)")
     base = record.get("base_limits")
     if base is not None:
         keys = ("speed_m_s", "turn_rad_s", "accel_m_s2", "turn_accel_rad_s2")
@@ -255,3 +259,23 @@ def _check_state(record: dict[str, Any], header: dict[str, Any], fail) -> None:
             isinstance(action, dict) and isinstance(action.get("name"), str)
             and (action.get("object") is None or isinstance(action.get("object"), str))):
         raise fail("action: expected null or {\"name\": text, \"object\": text or null}")
+
+
+def trace_setup(trace: Trace) -> Any:
+    """The setup a trace was written in, loaded as its header names it; TraceError if it
+    cannot be loaded or has changed since (its content hash, where the header has one:
+    checking a trace against another scene than the one it ran in would find what was
+    never there, or miss what was)."""
+    from cramlite.errors import UserInputError
+    from cramlite.world.setup import load_setup
+
+    try:
+        setup = load_setup(trace.header["setup"])
+    except UserInputError as exc:
+        raise TraceError(f"header field setup: {exc}", field="line 1") from None
+    recorded = trace.header.get("setup_hash")
+    if recorded and setup.content_hash != recorded:
+        raise TraceError(f"the setup {trace.header['setup']!r} has changed since this trace was "
+                         f"written (content hash {recorded}, now {setup.content_hash}); "
+                         "expected the setup files as they were", field="line 1")
+    return setup

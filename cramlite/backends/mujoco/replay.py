@@ -7,17 +7,12 @@ from collections.abc import Sequence
 from typing import Any
 
 from cramlite.backends.mujoco.world import MujocoWorld
-from cramlite.errors import UserInputError
-from cramlite.trace.format import Trace, TraceError
-from cramlite.world.setup import load_setup
+from cramlite.trace.format import Trace, TraceError, trace_setup
 
 
 def world_for(trace: Trace) -> MujocoWorld:
     """A world of the trace's setup (its header names it as `load_setup` accepts)."""
-    try:
-        setup = load_setup(trace.header["setup"])
-    except UserInputError as exc:
-        raise TraceError(f"header field setup: {exc}", field="line 1") from None
+    setup = trace_setup(trace)
     world = MujocoWorld(setup)
     missing = [n for n in trace.header["joints"] if n not in world.robot_qpos]
     missing += [n for n in trace.header["world_joints"] if n not in world.world_qpos]

@@ -11,9 +11,7 @@ import numpy as np
 
 from cramlite.backends.pybullet.client import p
 from cramlite.backends.pybullet.world import World
-from cramlite.errors import UserInputError
-from cramlite.trace.format import Trace, TraceError
-from cramlite.world.setup import load_setup
+from cramlite.trace.format import Trace, TraceError, trace_setup
 
 #: The replay camera: from above the south end, the island on the left, the counter on
 #: the right, the robot between them.
@@ -22,10 +20,7 @@ CAMERA = {"target": (0.15, 0.15, 0.3), "distance": 5.6, "yaw_deg": -20.0, "pitch
 
 def world_for(trace: Trace, gui: bool = False) -> World:
     """A world of the trace's setup (its header names it as `load_setup` accepts)."""
-    try:
-        setup = load_setup(trace.header["setup"])
-    except UserInputError as exc:
-        raise TraceError(f"header field setup: {exc}", field="line 1") from None
+    setup = trace_setup(trace)
     world = World.from_setup(setup, gui=gui)
     missing = [n for n in trace.header["joints"] if n not in world.robot.joint_index]
     missing += [n for n in trace.header["world_joints"] if n not in world.world_joints]
