@@ -90,6 +90,52 @@ def test_the_hollow_bowl_is_taken_out_of_its_drawer_by_its_rim_and_carried(
     assert found == [], [f.describe() for f in found]
 
 
+def test_a_rim_grasp_crosses_a_wall_of_the_bowl_near_its_middle_whatever_the_heading(
+        ) -> None:
+    """The bowl's rim is 16 flat walls: fingers closing where two meet press into the
+    corner they form (2.1 mm at 9.8 degrees off a wall's middle, a user's setup found)."""
+    from cramlite.designators.grasps import RIM_MAX_SQUINT_RAD
+
+    (rim,) = [g for g in item_grasps(item_model(ROOT / "worlds" / "items" / "bowl.urdf",
+                                                "bowl")) if g.kind == "rim"]
+    assert rim.rim_sides == 16
+    wall = 2 * math.pi / rim.rim_sides
+    for item_yaw in (0.0, 0.3, -2.0):
+        for heading in np.radians(np.arange(-180.0, 180.0, 0.5)):
+            tool_yaw = rim.tool_yaw(item_yaw, float(heading))
+            off = math.remainder(tool_yaw + math.pi / 2 - item_yaw - rim.rim_phase, wall)
+            assert abs(off) <= RIM_MAX_SQUINT_RAD + 1e-9
+            # turned no more than needed (none within 5 degrees of a middle)
+            needed = max(0.0, abs(math.remainder(heading + math.pi / 2 - item_yaw
+                                                 - rim.rim_phase, wall)) - RIM_MAX_SQUINT_RAD)
+            assert abs(math.remainder(tool_yaw - heading, 2 * math.pi)) <= needed + 1e-9
+
+
+def test_a_bowl_on_the_counter_is_held_by_its_rim_with_the_fingertips_outside_it(
+        tmp_path: Path) -> None:
+    setup = tmp_path / "bowl_on_counter.yaml"
+    setup.write_text("""format: 1
+name: bowl-on-counter
+description: a user's setup whose bowl was gripped 2.1 mm deep where two walls meet
+world: kitchen
+robot:
+  start: [-0.5, -1.8, 1.5708]
+items:
+  - {name: cup, type: cup, pose: [1.45, 0.6, 0.85, 0.0], surface: counter,
+     category: none, target: [-0.9, 1.3, 0.86, 0.0]}
+  - {name: bowl, type: bowl, pose: [1.45, -0.4, 0.85, 0.0], surface: counter,
+     category: mid, target: [-0.95, 1.05, 0.86, 0.0]}
+  - {name: spoon, type: spoon, pose: [1.4, -0.25, 0.6, 0.0], in: drawer_2,
+     category: none, target: [-0.85, 1.55, 0.86, 0.0]}
+baseline_order: [spoon, cup, bowl]
+""")
+    trace = tmp_path / "t.jsonl"
+    done = run_cli("run", str(setup), "--backend", "kinematic", "--trace", str(trace))
+    assert done.returncode == 0, done.stdout + done.stderr
+    check = run_cli("replay", str(trace), "--check")
+    assert check.returncode == 0 and "nothing found" in check.stdout, check.stdout
+
+
 def _straight_tilt(check, a: np.ndarray, b: np.ndarray) -> float:
     return max((tilt for s in np.linspace(0, 1, 41) for _, tilt in check.tilts(a + s * (b - a))),
                default=0.0)

@@ -43,6 +43,9 @@ PALM_CLEARANCE_M = 0.01
 #: the fingertips this far above the surface the item stands on.
 TOP_GRIP_M = 0.035
 FINGERTIP_FLOOR_M = 0.005
+#: A rim grasp's fingers cross a flat wall at most this far off its middle (see
+#: `Grasp._square_to_a_wall`; 5 degrees: fingertips at most ~1.5 mm inside the bowl).
+RIM_MAX_SQUINT_RAD = math.radians(5.0)
 #: A rim grasp's fingertips reach this far below the rim.
 RIM_GRIP_M = 0.03
 #: A front grasp's tool yaw may differ from the robot's heading by at most this.
@@ -79,6 +82,11 @@ class Grasp:
     #: The tool point relative to the item's centre, in the frame turned by the tool's
     #: yaw: (-inset, 0) for a front grasp by the near edge, (0, radius) at a rim.
     offset: tuple[float, float] = (0.0, 0.0)
+    #: A rim of flat walls: a ring of `rim_sides` boxes, one's middle at `rim_phase` rad in
+    #: the item's frame (0 sides: round). The fingers straddle one wall squarely, within
+    #: RIM_MAX_SQUINT_RAD of its middle (`tool_yaw`).
+    rim_sides: int = 0
+    rim_phase: float = 0.0
 
     def __str__(self) -> str:
         return self.kind
@@ -91,10 +99,24 @@ class Grasp:
         """The tool yaw for this grasp of an item turned to `item_yaw`, nearest the robot's
         heading (a front grasp: None if none is within FRONT_MAX_TURN_RAD of it)."""
         if self.yaws is None:
-            return heading
+            return self._square_to_a_wall(item_yaw, heading)
         options = [heading + math.remainder(item_yaw + r - heading, 2 * math.pi)
                    for r in self.yaws]
         return self._nearest(options, heading)
+
+    def _square_to_a_wall(self, item_yaw: float, yaw: float) -> float:
+        """A rim grasp's tool yaw: `yaw`, turned (the least) so that the fingers cross a
+        wall of a rim of flat walls within RIM_MAX_SQUINT_RAD of its middle. Near where two
+        walls meet, the fingertips' flat pads would close into the corner they form (the
+        bowl's 16 walls: 2 mm deep 8 degrees off a wall's middle, 0.6 mm at it)."""
+        if self.kind != "rim" or self.rim_sides < 3:
+            return yaw
+        # (the tool point lies along the tool's +y: at yaw + 90 deg, in the item's frame)
+        off = math.remainder(yaw + math.pi / 2 - item_yaw - self.rim_phase,
+                             2 * math.pi / self.rim_sides)
+        if abs(off) <= RIM_MAX_SQUINT_RAD:
+            return yaw
+        return yaw - off + math.copysign(RIM_MAX_SQUINT_RAD, off)
 
     def place_yaw(self, target_yaw: float, held_yaw: float, heading: float,
                   symmetry_deg: float) -> float | None:
@@ -154,8 +176,8 @@ def _grasps_of_kind(model: ItemModel, kind: str) -> list[Grasp]:
         rim = _rim(model)
         if rim is None or not _fits(rim[1]):
             return []
-        radius, thickness, top = rim
-        return [Grasp("rim", top - RIM_GRIP_M, thickness, None, (0.0, radius))]
+        radius, thickness, top, sides, phase = rim
+        return [Grasp("rim", top - RIM_GRIP_M, thickness, None, (0.0, radius), sides, phase)]
     if len(model.shapes) != 1 or model.shapes[0].kind not in (BOX, CYLINDER):
         return []
     shape = model.shapes[0]
@@ -180,9 +202,11 @@ def _grasps_of_kind(model: ItemModel, kind: str) -> list[Grasp]:
     return out
 
 
-def _rim(model: ItemModel) -> tuple[float, float, float] | None:
-    """(radius, wall thickness, rim height) of a hollow round item made of a ring of wall
-    boxes (their local x pointing out from the axis) on a base; None if it is not one."""
+def _rim(model: ItemModel) -> tuple[float, float, float, int, float] | None:
+    """(radius, wall thickness, rim height, sides, phase) of a hollow round item made of a
+    ring of wall boxes (their local x pointing out from the axis) on a base; None if it is
+    not one. `sides`: the number of walls if they are evenly spaced (one's middle at angle
+    `phase`), else 0."""
     walls = [s for s in model.shapes if s.kind == BOX and
              np.hypot(*s.in_link[:2, 3]) > 1e-3]
     if len(walls) < 8:
@@ -192,7 +216,12 @@ def _rim(model: ItemModel) -> tuple[float, float, float] | None:
     tops = [float(s.in_link[2, 3] + s.half[2]) for s in walls]
     if max(radii) - min(radii) > 1e-3:
         return None
-    return float(np.mean(radii)), max(thickness), min(tops)
+    angles = sorted(math.atan2(s.in_link[1, 3], s.in_link[0, 3]) for s in walls)
+    step = 2 * math.pi / len(walls)
+    even = all(abs(math.remainder(a - angles[0] - k * step, 2 * math.pi)) < 1e-3
+               for k, a in enumerate(angles))
+    return (float(np.mean(radii)), max(thickness), min(tops), len(walls) if even else 0,
+            angles[0] if even else 0.0)
 
 
 def _rz(yaw: float) -> np.ndarray:
