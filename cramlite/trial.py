@@ -29,6 +29,7 @@ from cramlite.scene.scene import PlanningScene
 from cramlite.scene.transforms import quat_yaw, yaw_quat
 from cramlite.scene.validate import check_setup
 from cramlite.strategies import make_strategy
+from cramlite.strategies.base import CheckedStrategy
 from cramlite.world.setup import Setup, load_setup, resolve_setup_path
 
 RESTING_TOLERANCE_M = 0.01
@@ -123,6 +124,8 @@ class TrialRunner:
         chooser = make_strategy(strategy, params=params, dims=dims,
                                 rng=np.random.default_rng([seed, 1]),
                                 order=list(order or self.setup.baseline_order))
+        if not is_builtin(plan):  # (a user's plan calls it directly: checked for it)
+            chooser = CheckedStrategy(chooser)
         modules, injector = self.modules, None
         if inject:
             from cramlite.designators.injection import InjectingModules, Injector

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from cramlite.strategies import StrategyError, available_strategies, make_strategy
-from tests.conftest import run_cli
+from tests.conftest import ROOT, run_cli
 
 PLUGIN = '''
 from cramlite.strategies import Strategy
@@ -177,6 +177,20 @@ def test_run_with_a_misbehaving_plugin_is_one_clear_line(misbehaving: Path, cls:
     assert len(lines) == 1
     assert "--strategy" in lines[0] and f"misbehaving.{cls}" in lines[0]
     assert expected in lines[0]
+
+
+@pytest.mark.parametrize(("cls", "expected"), [
+    ("ReturnsNone", "returned None"), ("ResetRaises", "raised RuntimeError when reset")])
+def test_a_user_plan_that_asks_a_misbehaving_strategy_gets_one_clear_line(
+        misbehaving: Path, cls: str, expected: str) -> None:
+    """(A user's plan calls strategy.choose itself, as examples/fetch_two.py does: the
+    strategy it is given is checked as the built-in plans check theirs.)"""
+    plan = f"{ROOT / 'examples' / 'fetch_two.py'}:fetch_two"
+    result = run_cli_env(["run", "v1", "--plan", plan, "--strategy", f"misbehaving:{cls}",
+                          "--backend", "kinematic"], {"PYTHONPATH": str(misbehaving)})
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    assert f"misbehaving.{cls}" in result.stderr and expected in result.stderr, result.stderr
 
 
 @pytest.mark.parametrize("command", ["evaluate", "compare", "fit"])

@@ -11,6 +11,7 @@ instead of sampling.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
@@ -72,7 +73,14 @@ def check_params(params: OPMParams) -> None:
 def strategy_label(strategy: Strategy) -> str:
     """How to name a strategy in an error: its registered name and its class."""
     cls = type(strategy)
-    return f"{cls.name!r} ({cls.__module__}.{cls.__qualname__})"
+    where = cls.__module__
+    if where.startswith("_cramlite_user_"):  # (a file loaded by its path: name the file)
+        import inspect
+
+        with contextlib.suppress(TypeError, OSError):
+            where = inspect.getfile(cls)
+        return f"{cls.name!r} ({where}:{cls.__qualname__})"
+    return f"{cls.name!r} ({where}.{cls.__qualname__})"
 
 
 def checked_reset(strategy: Strategy, candidates: Sequence[Candidate],
@@ -159,6 +167,35 @@ def checked_batch(strategy: Strategy, remaining: Sequence[Candidate], agent: Seq
         raise StrategyCrashed(f"strategy {strategy_label(strategy)} returned {shown} as its "
                               f"batch; expected 1 to {capacity} distinct remaining candidates")
     return found
+
+
+class CheckedStrategy:
+    """A strategy as a user's plan is given it: `choose`, `reset`, `choose_batch` and
+    `tied` checked as the built-in plans check them (`checked_choice`, ...), so a plugin
+    that returns None or raises is a StrategyError naming it, not an AttributeError deep
+    in the plan; everything else is the strategy's own (`.strategy` is the strategy)."""
+
+    def __init__(self, strategy: Strategy):
+        self.strategy = strategy
+
+    def choose(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> Candidate:
+        return checked_choice(self.strategy, remaining, agent)
+
+    def reset(self, candidates: Sequence[Candidate], agent: Sequence[float]) -> None:
+        checked_reset(self.strategy, candidates, agent)
+
+    def choose_batch(self, remaining: Sequence[Candidate], agent: Sequence[float],
+                     capacity: int) -> list[Candidate]:
+        return checked_batch(self.strategy, remaining, agent, capacity)
+
+    def tied(self, remaining: Sequence[Candidate], agent: Sequence[float]) -> list[Candidate]:
+        return checked_tied(self.strategy, remaining, agent)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.strategy, name)
+
+    def __repr__(self) -> str:
+        return f"CheckedStrategy({self.strategy!r})"
 
 
 class Strategy(ABC):
