@@ -245,3 +245,18 @@ def test_a_folder_with_several_versions_of_a_plan_labels_each_apart() -> None:
     summary = summarise(labelled, {"v1": ("cup", "milk")})
     assert sorted(e["robot_time_s_mean"] for e in summary) == [10.0, 20.0]  # (not mixed)
     assert [r["strategy"] for r in by_backend(rows[:1])] == ["opm"]  # one version: no mark
+
+
+def test_a_plan_that_puts_an_item_where_it_wants_reports_it_delivered(tmp_path: Path) -> None:
+    """(The setup's target is the built-in plans' goal, not a user's plan's.)"""
+    (tmp_path / "own_spot.py").write_text(
+        "from cramlite import PlanReport, TransportAction\n\n\n"
+        "def plan(ctx, setup, strategy):\n"
+        "    report = PlanReport(order=['milk'])\n"
+        "    TransportAction('milk', target=(-0.9, 1.3, 0.86)).perform(ctx)\n"
+        "    report.success = True\n"
+        "    return report\n")
+    done = run_cli("run", "v1", "--plan", f"{tmp_path / 'own_spot.py'}:plan", "--backend",
+                   "kinematic")
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert ": success" in done.stdout and "  order: milk\n" in done.stdout, done.stdout

@@ -148,8 +148,11 @@ def cmd_run(args: argparse.Namespace) -> int:
         status = "success" if result.success else "FAILED"
         print(f"{result.setup} {result.plan} with {result.strategy} (seed {result.seed}) on "
               f"{result.backend}: {status}")
-        failed = {f.get("item") for f in result.failures} | {
-            name for name, item in result.items.items() if not item.get("ok", True)}
+        from cramlite.plan_registry import is_builtin
+
+        failed = {f.get("item") for f in result.failures}
+        if is_builtin(result.plan):  # (a user's plan puts items where it wants them)
+            failed |= {name for name, item in result.items.items() if not item.get("ok", True)}
         delivered = [n for n in result.order if n not in failed]
         missed = [n for n in result.order if n in failed]
         print(f"  order: {', '.join(delivered) or '(nothing delivered)'}"
@@ -157,8 +160,6 @@ def cmd_run(args: argparse.Namespace) -> int:
         if result.carry > 1:
             print(f"  carrying up to {result.carry} at once: {len(result.trips)} trips ("
                   + "; ".join(" + ".join(trip) for trip in result.trips) + ")")
-        from cramlite.plan_registry import is_builtin
-
         legs = (f"{result.straight_line_m:.2f} m" if result.straight_line_m or
                 is_builtin(result.plan) else "not reported by the plan (PlanReport.add_leg)")
         print(f"  driven base path {result.base_path_m:.2f} m, straight-line legs {legs}")
