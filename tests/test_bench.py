@@ -192,7 +192,8 @@ def test_out_that_cannot_be_a_results_folder(tmp_path: Path) -> None:
     afile.write_text("not a folder")
     for out, expected in ((afile, "is a file; expected a folder"),
                           (afile / "below", "cannot create or write the folder"),
-                          (Path("/sys/cramlite-results"), "cannot create or write the folder")):
+                          (Path("/sys/cramlite-results"), "cannot create or write the folder"),
+                          (ROOT / "worlds" / "results", "inside cramlite's own worlds")):
         result = bench(out, *SMALL)
         print(result.stderr)
         assert result.returncode == 2 and "Traceback" not in result.stderr

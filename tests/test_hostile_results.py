@@ -59,6 +59,12 @@ def _one_line(result, *expected: str) -> None:
     ("robot_time_s", "inf", "robot_time_s: expected a number >= 0"),
     ("wall_s", "-1", "wall_s: expected a number >= 0"),
     ("backend", "kine\x00matic", "backend: holds a control character"),
+    ("actions", "[1]", "actions: a node '1' is not an object"),
+    ("actions", '[{"name": "X", "start_s": 1, "end_s": 2}]', "actions: a node without"),
+    ("actions", '[{"name": "X", "status": "ok", "start_s": "a", "end_s": 2}]',
+     "start_s/end_s not numbers"),
+    ("actions", '[{"name": "X", "status": "ok", "start_s": 1, "end_s": 2, "children": 5}]',
+     "children '5' is not a list"),
 ])
 def test_report_names_a_tampered_row(results, tmp_path, column, value, expected) -> None:
     out = _tampered(results, tmp_path, column, value)
@@ -67,11 +73,34 @@ def test_report_names_a_tampered_row(results, tmp_path, column, value, expected)
 
 @pytest.mark.parametrize("column, value, expected", [
     ("error", "x" * 200_000, "field limit"), ("trial", "\u00b2", "trial: expected"),
-    ("success", "maybe", "success: expected"), ("backend", "kine\x00matic", "NUL")])
+    ("success", "maybe", "success: expected"), ("backend", "kine\x00matic", "NUL"),
+    ("items", "{not json", "items: expected a JSON dict"),
+    ("actions", "[1]", "actions: a node '1' is not an object")])
 def test_a_resumed_bench_names_an_unreadable_row(results, tmp_path, column, value,
                                                  expected) -> None:
+    """(Before any trial runs: a file the report would refuse at the end is refused
+    first.)"""
     out = _tampered(results, tmp_path, column, value)
-    _one_line(run_cli(*BENCH, "--out", str(out)), "trials.csv", "line 2", expected)
+    done = run_cli(*BENCH[:-2], "--trials", "2", "--backend", "kinematic", "--out", str(out))
+    _one_line(done, "trials.csv", "line 2", expected)
+    assert "1 trials" not in done.stdout + done.stderr  # (refused before running any)
+    assert (out / "trials.csv").read_bytes().count(b"\nv1,") == 1
+
+
+def _csv_rows(out: Path) -> list[dict[str, str]]:
+    return list(csv.DictReader((out / "trials.csv").open(newline="")))
+
+
+def test_a_row_copied_twice_counts_once(results, tmp_path) -> None:
+    out = _tampered(results, tmp_path, "error", "")
+    text = (out / "trials.csv").read_text()
+    (out / "trials.csv").write_text(text + text.splitlines(keepends=True)[1])  # (row 1 again)
+    assert len(_csv_rows(out)) == 2
+    done = run_cli(*BENCH, "--out", str(out), "--no-plots")  # (resumed: nothing to run)
+    assert done.returncode == 0, done.stderr
+    summary = list(csv.DictReader((out / "summary.csv").open(newline="")))
+    assert [row["trials"] for row in summary] == ["1"]
+    assert "1 trial in trials.csv" in (out / "report.html").read_text()
 
 
 def test_a_trials_huge_exception_text_is_bounded_and_the_folder_stays_readable(
@@ -104,3 +133,30 @@ def test_a_malformed_record_in_the_middle_is_refused_never_cut(results, tmp_path
     (out / "trials.csv").write_text(text)
     _one_line(run_cli(*BENCH, "--out", str(out)), "trials.csv", "line 3", "not a CSV record")
     assert (out / "trials.csv").read_text() == text  # (the rows after it are all kept)
+
+
+def test_a_full_disk_stops_the_bench_in_one_line_and_the_next_run_resumes(
+        results, tmp_path) -> None:
+    import resource
+    import subprocess
+    import sys
+
+    from tests.conftest import ROOT
+
+    out = _tampered(results, tmp_path, "error", "")
+    room = (out / "trials.csv").stat().st_size + 1024  # (not a second whole row)
+
+    def full_disk() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (room, room))
+
+    done = subprocess.run([sys.executable, "-m", "cramlite", *BENCH[:-2], "--trials", "2",
+                           "--backend", "kinematic", "--workers", "1", "--no-plots",
+                           "--out", str(out)], capture_output=True, text=True, cwd=ROOT,
+                          timeout=300, preexec_fn=full_disk)
+    assert done.returncode == 2, done.stderr[-2000:]
+    assert "Traceback" not in done.stderr
+    assert "trials.csv: cannot write a trial's row (" in done.stderr.splitlines()[-1]
+    again = run_cli(*BENCH[:-2], "--trials", "2", "--backend", "kinematic", "--no-plots",
+                    "--out", str(out))  # (room again: the cut row is repaired, resumed)
+    assert again.returncode == 0, again.stderr[-2000:]
+    assert len(_csv_rows(out)) == 2

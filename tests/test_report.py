@@ -165,6 +165,20 @@ def test_report_of_an_interrupted_and_of_a_running_bench(bench_dir: Path, tmp_pa
     assert "a bench is still writing into this folder" in (folder / "report.html").read_text()
 
 
+def test_a_report_removes_only_its_own_old_pictures(bench_dir: Path, tmp_path) -> None:
+    copy = tmp_path / "mine"
+    shutil.copytree(bench_dir, copy, ignore=shutil.ignore_patterns("traces"))
+    media = copy / "report"
+    (media / "figure1.png").write_bytes(b"a user's figure")
+    (media / "anim.gif").write_bytes(b"a user's animation")
+    stale = media / "timeline-v1-opm-99.png"  # (a picture an earlier report drew)
+    stale.write_bytes(b"old")
+    assert cli("report", str(copy), "--no-plots").returncode == 0
+    assert (media / "figure1.png").read_bytes() == b"a user's figure"
+    assert (media / "anim.gif").read_bytes() == b"a user's animation"
+    assert not stale.exists()
+
+
 def test_report_is_the_same_when_built_twice(bench_dir: Path, tmp_path) -> None:
     copy = tmp_path / "again"
     shutil.copytree(bench_dir, copy, ignore=shutil.ignore_patterns("report*", "traces"))

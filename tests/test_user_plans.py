@@ -146,6 +146,9 @@ def test_bench_runs_resumes_and_reports_a_plan_file_keyed_by_its_content(
     rows = _rows(out)
     assert len(rows) == 8
     assert {len(r["order"].split()) for r in rows if r["code_hash"] != first_hash} == {1}
+    # the report shows this command's trials, not the earlier version's beside them
+    page = (out / "report.html").read_text()
+    assert "4 trials in trials.csv" in page and "4 more of earlier bench commands" in page
 
 
 def test_bench_on_dask_runs_a_plan_file(tmp_path: Path) -> None:
@@ -230,21 +233,6 @@ def test_a_plan_named_as_a_module_is_keyed_by_its_file_s_content(tmp_path: Path,
     # an importable module's source file, as well
     assert trial_code_hash("json:dumps", "opm") == trial_code_hash("json:loads", "opm") != ""
 
-
-def test_a_folder_with_several_versions_of_a_plan_labels_each_apart() -> None:
-    from cramlite.bench.labels import base_name, by_backend
-    from cramlite.bench.summary import summarise
-
-    rows = [{"setup": "v1", "strategy": "opm", "plan": "./p.py:plan", "code_hash": code,
-             "backend": "kinematic", "carry": 1, "success": "True", "robot_time_s": time,
-             "order": "cup milk"} for code, time in (("aaaa1111bbbb", 10.0),
-                                                     ("cccc2222dddd", 20.0))]
-    labelled = by_backend(rows)
-    assert [r["strategy"] for r in labelled] == ["opm~aaaa1111", "opm~cccc2222"]
-    assert {base_name(r["strategy"]) for r in labelled} == {"opm"}
-    summary = summarise(labelled, {"v1": ("cup", "milk")})
-    assert sorted(e["robot_time_s_mean"] for e in summary) == [10.0, 20.0]  # (not mixed)
-    assert [r["strategy"] for r in by_backend(rows[:1])] == ["opm"]  # one version: no mark
 
 
 def test_a_plan_that_puts_an_item_where_it_wants_reports_it_delivered(tmp_path: Path) -> None:

@@ -14,9 +14,6 @@ from typing import Any
 
 #: How a label marks trials that carried several items at once: `opm×2`.
 CARRY_MARK = "×"
-#: How a label marks the plan (or the version of a plan or strategy file) of its trials,
-#: where a folder holds several: `opm~3f2a9c1b` (trials of two versions never mix).
-VERSION_MARK = "~"
 
 
 def several_backends(rows: Sequence[dict[str, Any]]) -> bool:
@@ -27,18 +24,10 @@ def several_carries(rows: Sequence[dict[str, Any]]) -> bool:
     return len({str(r.get("carry") or 1) for r in rows}) > 1
 
 
-def _version(row: dict[str, Any]) -> tuple[str, str]:
-    return (row.get("plan") or "", row.get("code_hash") or "")
-
-
 def by_backend(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """The rows, each strategy labelled with its backend where there are several
-    (`opm@kinematic`), with how many it carried where that varies (`opm×2`, `opm×1`), and
-    with its plan, or its code's hash, where a folder holds trials of several plans or
-    versions of one (`opm~3f2a9c1b`: a changed plan or strategy file is a new one)."""
+    (`opm@kinematic`) and with how many it carried where that varies (`opm×2`, `opm×1`)."""
     backends, carries = several_backends(rows), several_carries(rows)
-    versions = {_version(r) for r in rows}
-    plans = {plan for plan, _ in versions}
     out = []
     for r in rows:
         label = r["strategy"]
@@ -46,16 +35,13 @@ def by_backend(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             label += f"{CARRY_MARK}{r.get('carry') or 1}"
         if backends:
             label += f"@{r.get('backend') or '?'}"
-        if len(versions) > 1:
-            plan, code = _version(r)
-            label += VERSION_MARK + (code[:8] if code else plan if len(plans) > 1 else "")
         out.append({**r, "strategy_name": r["strategy"], "strategy": label})
     return out
 
 
 def base_name(label: str) -> str:
-    """The strategy's own name in a label: `opm` of `opm×2@kinematic~3f2a9c1b`."""
-    return label.split(VERSION_MARK)[0].split("@")[0].split(CARRY_MARK)[0]
+    """The strategy's own name in a label: `opm` of `opm×2@kinematic`."""
+    return label.split("@")[0].split(CARRY_MARK)[0]
 
 
 def variant(label: str) -> str:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping
+from typing import Any
 
 #: Columns holding a whole number (an index or a seed).
 WHOLE_COLUMNS = {"trial": 9, "seed": 20, "batch_seed": 20}
@@ -48,4 +49,71 @@ def row_problem(row: Mapping[str, str]) -> tuple[str, str] | None:
     return None
 
 
-__all__ = ["row_problem"]
+#: Columns holding JSON, and what each must be.
+JSON_COLUMNS = {"failures": list, "items": dict, "actions": list, "driven_path": list}
+
+
+class CellProblem(ValueError):
+    """A cell of a row that no bench writes: its column and what is wrong."""
+
+    def __init__(self, column: str, message: str):
+        super().__init__(f"{column}: {message}")
+        self.column = column
+
+
+def parsed_json_cells(row: Mapping[str, Any]) -> dict[str, Any]:
+    """The JSON columns of a row (those it has), parsed and checked as the report reads
+    them: CellProblem naming the first that is not what a bench writes (the bench checks
+    a folder with it before resuming, so a file the report would refuse is refused before
+    any trial runs, not after all of them)."""
+    from cramlite.safe_json import JSONInputError, parse_json
+
+    out: dict[str, Any] = {}
+    for column, kind in JSON_COLUMNS.items():
+        if column not in row:
+            continue
+        cell = row.get(column) or ("[]" if kind is list else "{}")
+        if isinstance(cell, str):
+            try:
+                value = parse_json(cell)
+            except JSONInputError:
+                value = None
+        else:
+            value = cell
+        if not isinstance(value, kind):
+            raise CellProblem(column, f"expected a JSON {kind.__name__}, got {str(cell)[:40]!r}")
+        out[column] = value
+    if not all(isinstance(p, list) and len(p) >= 2 and all(_finite(v) for v in p)
+               for p in out.get("driven_path", [])):
+        raise CellProblem("driven_path", "expected a list of [x, y, ...] points (finite "
+                                         f"numbers), got {str(row.get('driven_path'))[:40]!r}")
+    problem = _task_tree_problem(out.get("actions", []))
+    if problem:
+        raise CellProblem("actions", f"{problem}; expected the task tree a bench writes "
+                                     "(nodes with a name, start_s, end_s, status, children)")
+    return out
+
+
+def _finite(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and \
+        math.isfinite(value)
+
+
+def _task_tree_problem(nodes: Any, depth: int = 0) -> str | None:
+    if not isinstance(nodes, list):
+        return f"children {str(nodes)[:30]!r} is not a list"
+    for node in nodes:
+        if not isinstance(node, dict):
+            return f"a node {str(node)[:30]!r} is not an object"
+        if not isinstance(node.get("name"), str) or not isinstance(node.get("status"), str):
+            return f"a node without a name or status ({str(node)[:40]!r})"
+        if not _finite(node.get("start_s")) or not (node.get("end_s") is None
+                                                   or _finite(node.get("end_s"))):
+            return f"node {node['name'][:30]!r}: start_s/end_s not numbers"
+        problem = _task_tree_problem(node.get("children", []), depth + 1)
+        if problem:
+            return problem
+    return None
+
+
+__all__ = ["CellProblem", "JSON_COLUMNS", "parsed_json_cells", "row_problem"]

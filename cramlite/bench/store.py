@@ -16,17 +16,19 @@ next rows would be swallowed into its open quote) and cuts the file there.
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import json
 import os
 import platform
 import sys
 import time
+from collections.abc import Sequence
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from cramlite.bench.row_check import row_problem
+from cramlite.bench.row_check import CellProblem, parsed_json_cells, row_problem
 from cramlite.errors import UserInputError
 from cramlite.file_limits import checked_file
 from cramlite.safe_json import parse_json
@@ -60,6 +62,12 @@ def row_key(row: dict[str, Any]) -> tuple[str, ...]:
     return tuple(str(row[c]) for c in KEY_COLUMNS)
 
 
+def key_digest(key: Sequence[str]) -> str:
+    """A trial's key (`TrialSpec.key`, `row_key`) as 16 hex digits: how metadata.json
+    lists the trials of the last bench command (the report shows those)."""
+    return hashlib.sha256("\x1f".join(key).encode()).hexdigest()[:16]
+
+
 class TrialStore:
     def __init__(self, folder: str | Path):
         self.folder = Path(folder)
@@ -67,15 +75,18 @@ class TrialStore:
         self.path = self.folder / "trials.csv"
         self._synced = -SYNC_INTERVAL_S
 
-    def rows(self) -> list[dict[str, str]]:
-        """The complete records (a row being written, or cut by a kill, is not one)."""
+    def rows(self, json_checked: bool = False) -> list[dict[str, str]]:
+        """The complete records (a row being written, or cut by a kill, is not one), each
+        once (a row copied into the file twice counts once); `json_checked`: their JSON
+        cells checked as the report reads them too (`row_check.parsed_json_cells`)."""
         if not self.path.exists():
             return []
         checked_file(self.path, "results")
         with self.path.open("rb") as handle:
             data = handle.read()
         text = data[:self._records_end(data)].decode("utf-8", errors="replace")
-        rows = []
+        rows: list[dict[str, str]] = []
+        seen: set[tuple[str, ...]] = set()
         reader = csv.DictReader(io.StringIO(text, newline=""))
         try:
             for row in reader:
@@ -85,6 +96,16 @@ class TrialStore:
                 if problem:
                     raise UserInputError(f"{problem[0]}: {problem[1]}", source=str(self.path),
                                          field=f"line {reader.line_num}")
+                if json_checked:
+                    try:
+                        parsed_json_cells(row)
+                    except CellProblem as exc:
+                        raise UserInputError(str(exc), source=str(self.path),
+                                             field=f"line {reader.line_num}") from None
+                key = row_key(row)
+                if key in seen:
+                    continue  # (the same trial twice: the first record stands)
+                seen.add(key)
                 rows.append(row)
         except csv.Error as exc:  # e.g. a cell over the csv module's 128 KiB
             raise UserInputError(f"not a CSV record ({exc}); expected the rows `cramlite "
@@ -115,7 +136,7 @@ class TrialStore:
             raise StoreMismatch(f"{self.path} has other columns (written by another cramlite "
                                 "version); expected a new folder or one written by this "
                                 "version")
-        for row in self.rows():
+        for row in self.rows(json_checked=True):
             expected = setup_hashes.get(row["setup"])
             if expected is not None and row["setup_hash"] != expected:
                 raise StoreMismatch(
@@ -152,17 +173,23 @@ class TrialStore:
             writer.writeheader()
         writer.writerow(row)
         data = buffer.getvalue().encode("utf-8")
-        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
         try:
-            written = os.write(fd, data)
-            if written != len(data):  # (a regular file takes it whole, or fails: disk full)
-                raise OSError(28, "No space left on device", str(self.path))
-            now = time.monotonic()
-            if now - self._synced >= SYNC_INTERVAL_S:
-                os.fsync(fd)
-                self._synced = now
-        finally:
-            os.close(fd)
+            fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+            try:
+                written = os.write(fd, data)
+                if written != len(data):  # (a regular file takes it whole, or fails)
+                    raise OSError(28, "No space left on device", str(self.path))
+                now = time.monotonic()
+                if now - self._synced >= SYNC_INTERVAL_S:
+                    os.fsync(fd)
+                    self._synced = now
+            finally:
+                os.close(fd)
+        except OSError as exc:  # (a full disk, a file made read-only: the batch stops)
+            raise UserInputError(f"cannot write a trial's row ({exc.strerror or exc}); "
+                                 "expected a writable file with room for it (the rows "
+                                 "written are kept: the same command resumes once there "
+                                 "is)", source=str(self.path)) from None
 
     def results_format(self) -> int:
         """The format of the results in the folder (1: before it was recorded)."""
@@ -173,7 +200,10 @@ class TrialStore:
             return 1
         return value if type(value) is int else 1  # (not true, which == 1)
 
-    def write_metadata(self, args: dict[str, Any], executor: str) -> None:
+    def write_metadata(self, args: dict[str, Any], executor: str,
+                       batch: Sequence[str] = ()) -> None:
+        """metadata.json: the versions, the host, this command's arguments and `batch`,
+        its trials' key digests (`key_digest`), with the earlier commands' in `runs`."""
         versions = {}
         for package in ("cramlite", "pybullet", "mujoco", "pin", "coal", "ompl", "numpy",
                         "scipy", "example-robot-data", "dask", "distributed"):
@@ -184,7 +214,7 @@ class TrialStore:
         data = {"results_format": RESULTS_FORMAT,
                 "written": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "python": sys.version,
                 "platform": platform.platform(), "host": platform.node(), "executor": executor,
-                "versions": versions, "arguments": args}
+                "versions": versions, "arguments": args, "batch": list(batch)}
         runs = []
         meta = self.folder / "metadata.json"
         if meta.exists():
@@ -192,8 +222,12 @@ class TrialStore:
                 runs = parse_json(meta.read_text(encoding="utf-8")).get("runs", [])
             except (OSError, ValueError, AttributeError):
                 runs = []
-        (self.folder / "metadata.json").write_text(json.dumps({**data, "runs": runs + [data]},
-                                                              indent=2))
+        # (the trials' digests are the last command's alone: not repeated in `runs`)
+        earlier = {k: v for k, v in data.items() if k != "batch"}
+        text = json.dumps({**data, "runs": runs + [earlier]}, indent=2)
+        temporary = meta.with_name(meta.name + ".tmp")  # (whole or not at all)
+        temporary.write_text(text)
+        os.replace(temporary, meta)
 
 
 class _Lines:

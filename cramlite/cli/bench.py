@@ -119,11 +119,17 @@ def _results_folder(path: str):
     from pathlib import Path
 
     from cramlite.bench.lock import FolderBusy, FolderLock
+    from cramlite.resources import data_dir, worlds_dir
 
     out = Path(path)
     if out.exists() and not out.is_dir():
         raise UserInputError("is a file; expected a folder for the results", source=path,
                              field="--out")
+    shipped = [d.resolve() for d in (worlds_dir(), data_dir())]
+    if any(out.resolve().is_relative_to(d) for d in shipped):  # (its setups would be
+        # listed as shipped ones)
+        raise UserInputError("is inside cramlite's own worlds or data folder; expected a "
+                             "folder of yours for the results", source=path, field="--out")
     try:
         out.mkdir(parents=True, exist_ok=True)
         lock = FolderLock(out)
@@ -235,7 +241,10 @@ def _run(args, strategies, setups, workers, out) -> int:
                      os.getcwd(), args.inject_text, tuple(args.carry))
     done = {key for key in store.done_keys() if plan.contains(key)}
     total = plan.total()
-    store.write_metadata({k: v for k, v in vars(args).items() if k != "func"}, args.executor)
+    from cramlite.bench.store import key_digest
+
+    store.write_metadata({k: v for k, v in vars(args).items() if k != "func"}, args.executor,
+                         batch=[key_digest(spec.key) for spec in plan])
     where = (f"Dask scheduler {args.scheduler}" if args.scheduler
              else f"{workers} worker(s), executor {args.executor}")
     where += f", backend {', '.join(args.backends)}"

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import fnmatch
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -211,10 +212,17 @@ def _import_replays() -> None:
     import cramlite.trace.replay  # noqa: F401
 
 
+#: The names of the pictures a report draws (and so may remove again): a file of any
+#: other name in the folder is not the report's, and stays.
+REPORT_PICTURES = ("map-*.png", "timeline-*.png", "replay-*.gif", "*_by_setup.png",
+                   "*_aggregated.png", "all_orders_base_path.png", "*.part", "*.part.*")
+
+
 def _tidy(media: Path, written: set[str]) -> None:
-    """Remove the pictures of earlier builds that this page does not show."""
+    """Remove the pictures of earlier builds that this page does not show (only files
+    named as the report names its pictures: a user's own files in the folder stay)."""
     for path in media.iterdir():
         if path.is_file() and path.name not in written and \
-                path.suffix in (".png", ".gif", ".part"):
+                any(fnmatch.fnmatch(path.name, pattern) for pattern in REPORT_PICTURES):
             path.unlink(missing_ok=True)
 

@@ -17,16 +17,15 @@ from pathlib import Path
 from typing import Any
 
 from cramlite.bench.labels import by_backend, several_backends, several_carries
-from cramlite.bench.row_check import row_problem
+from cramlite.bench.row_check import JSON_COLUMNS, CellProblem, parsed_json_cells, row_problem
 from cramlite.bench.specs import FIXED_ORDER, trace_file
+from cramlite.bench.store import KEY_COLUMNS, key_digest
 from cramlite.errors import UserInputError
 from cramlite.file_limits import checked_file
 from cramlite.safe_json import JSONInputError, parse_json
 
 #: Columns the report cannot do without; the others default to empty.
 REQUIRED = ("setup", "strategy", "trial", "success", "order")
-#: Columns holding JSON, and what each must be.
-JSON_COLUMNS = {"failures": list, "items": dict, "actions": list, "driven_path": list}
 NOT_A_BENCH = "expected a results folder written by `cramlite bench --out DIR`"
 
 
@@ -43,6 +42,9 @@ class BenchFolder:
     planned: int | None = None  #: trials the last bench command runs in all
     planned_done: int = 0  #: of them, how many are in the folder
     running: str = ""  #: who holds the folder's lock (a bench still filling it), or ""
+    #: Trials in trials.csv of other bench commands than the last (not shown: other
+    #: options, seeds, versions of a plan; `metadata.json` lists the last one's trials).
+    other_batches: int = 0
 
     @property
     def backends(self) -> list[str]:
@@ -77,11 +79,19 @@ def read_folder(path: str | Path, running: bool | None = None) -> BenchFolder:
         raise UserInputError(f"holds no trials.csv or metadata.json; {NOT_A_BENCH}",
                              source=src)
     metadata = _metadata(meta_path)
-    rows = by_backend(_rows(csv_path))
+    every = _rows(csv_path)
+    batch = metadata.get("batch")
+    wanted = {str(digest) for digest in batch} if isinstance(batch, list) else set()
+    # the last bench command's trials (none of them yet, or a folder of a cramlite before
+    # 2026-12: every row)
+    rows = [r for r in every if key_digest(_key(r)) in wanted]
+    in_batch = len(rows)
+    rows = rows or every
     if not rows:
         raise UserInputError("no finished trial yet; expected at least one row (rerun the "
                              "report once the bench has finished a trial)",
                              source=str(csv_path))
+    rows = by_backend(rows)
     arguments = metadata.get("arguments") if isinstance(metadata.get("arguments"), dict) \
         else {}
     strategies = {r["strategy"] for r in rows}
@@ -89,9 +99,13 @@ def read_folder(path: str | Path, running: bool | None = None) -> BenchFolder:
         # for, also those with no row yet)
         strategies |= set(_names(arguments.get("strategies")))
     result = BenchFolder(folder, rows, metadata, {},
-                         strategies=sorted(strategies - {FIXED_ORDER}))
+                         strategies=sorted(strategies - {FIXED_ORDER}),
+                         other_batches=len(every) - len(rows))
     _load_setups(result, arguments)
-    _planned(result, arguments)
+    if wanted:
+        result.planned, result.planned_done = len(wanted), in_batch
+    else:
+        _planned(result, arguments)
     result.running = "" if running is False else _lock_holder(folder)
     return result
 
@@ -129,11 +143,12 @@ def _rows(path: Path) -> list[dict[str, Any]]:
     if missing:
         raise UserInputError(f"has no column {', '.join(missing)}; expected the columns "
                              "`cramlite bench` writes", source=src, field="line 1")
-    rows = []
+    rows, seen = [], set()
     try:
         for number, row in enumerate(reader, start=2):
             row = _checked_row(row, header, src, number)
-            if row is not None:
+            if row is not None and _key(row) not in seen:  # (a trial twice: the first)
+                seen.add(_key(row))
                 rows.append(row)
     except csv.Error as exc:  # e.g. a cell over the csv module's 128 KiB
         raise UserInputError(f"not a CSV record ({exc}); {NOT_A_BENCH}", source=src,
@@ -147,25 +162,20 @@ def _checked_row(row: dict[str, Any], header: list[str], src: str, number: int,
     if None in row or any(row.get(c) is None for c in header):
         return None  # a line cut short by a kill, or being written
     for column, kind in JSON_COLUMNS.items():
-        cell = row.get(column) or ("[]" if kind is list else "{}")
-        try:
-            value = parse_json(cell)
-        except JSONInputError:
-            value = None
-        if not isinstance(value, kind):
-            raise UserInputError(f"{column}: expected a JSON {kind.__name__}, got "
-                                 f"{cell[:40]!r}", source=src, field=f"line {number}")
-        row[column] = value
-    if not all(isinstance(p, list) and len(p) >= 2 and all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-            for v in p) for p in row["driven_path"]):
-        raise UserInputError("driven_path: expected a list of [x, y, ...] points (finite "
-                             f"numbers), got {row.get('driven_path')!r:.40}", source=src,
-                             field=f"line {number}")
+        row.setdefault(column, "[]" if kind is list else "{}")
+    try:
+        row.update(parsed_json_cells(row))
+    except CellProblem as exc:
+        raise UserInputError(str(exc), source=src, field=f"line {number}") from None
     problem = row_problem(row)
     if problem:
         raise UserInputError(f"{problem[0]}: {problem[1]}", source=src, field=f"line {number}")
     return row
+
+
+def _key(row: dict[str, Any]) -> tuple[str, ...]:
+    """A row's trial key, as `bench.store.row_key` (a column an older folder lacks: "")."""
+    return tuple(str(row.get(c, "")) for c in KEY_COLUMNS)
 
 
 def _names(text: Any) -> list[str]:

@@ -171,6 +171,9 @@ def _status(data: PageData) -> str:
     rows = folder.rows
     failed = sum(not ok(r) for r in rows)
     counts = f"{len(rows)} trial{'s' * (len(rows) != 1)} in trials.csv, {failed} failed"
+    if folder.other_batches:  # (the page shows the last bench command's trials)
+        counts += (f"; {folder.other_batches} more of earlier bench commands with other "
+                   "options are not shown (rerun such a command for its report)")
     if folder.running:
         return (f'<p class="status incomplete">Incomplete: a bench is still writing into this '
                 f'folder ({e(folder.running)}); {e(counts)}'
