@@ -44,9 +44,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "trial of interest (the first of each setup and strategy, every failed "
                     "one) a timeline of its task tree, its steps and, when the bench wrote "
                     "traces, its replay; with --all-orders, where each strategy falls among "
-                    "all orders. Works on a folder a bench is still filling or that was "
-                    "interrupted. Exit code 0: written, 2: not a bench folder or a "
-                    "malformed file (named).")
+                    "all orders. It shows the trials of the last bench command run into "
+                    "DIR (as that command's summary does; the page says how many others "
+                    "trials.csv holds: rerun such a command for its report). Works on a "
+                    "folder a bench is still filling or that was interrupted. Exit code 0: "
+                    "written, 2: not a bench folder or a malformed file (named).")
     report.add_argument("folder", metavar="DIR",
                         help="a results folder written by `cramlite bench --out DIR`")
     report.add_argument("--max-replays", type=whole_number(0, 10_000),
