@@ -160,3 +160,14 @@ def test_a_full_disk_stops_the_bench_in_one_line_and_the_next_run_resumes(
                     "--out", str(out))  # (room again: the cut row is repaired, resumed)
     assert again.returncode == 0, again.stderr[-2000:]
     assert len(_csv_rows(out)) == 2
+
+
+def test_a_results_file_saved_with_a_byte_order_mark_is_read(results, tmp_path) -> None:
+    """(As a spreadsheet saves a CSV: the mark is not part of the first column's name.)"""
+    out = _tampered(results, tmp_path, "error", "")
+    (out / "trials.csv").write_bytes(b"\xef\xbb\xbf" + (out / "trials.csv").read_bytes())
+    assert run_cli("report", str(out), "--no-plots").returncode == 0
+    done = run_cli(*BENCH[:-2], "--trials", "2", "--backend", "kinematic", "--no-plots",
+                   "--out", str(out))
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "(1 already in" in done.stderr

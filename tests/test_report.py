@@ -406,3 +406,18 @@ def test_the_plots_drawn_for_the_report_are_copied_where_asked(bench_dir: Path,
     for path in alone:
         assert (folder / path.name).read_bytes() == path.read_bytes()
         assert (folder / "report" / path.name).read_bytes() == path.read_bytes()
+
+
+def test_a_report_run_from_elsewhere_finds_a_setup_named_relative_to_the_bench(
+        tmp_path: Path) -> None:
+    from tests.conftest import run_cli
+
+    (tmp_path / "mine.yaml").write_text((ROOT / "examples" / "breakfast_for_one.yaml")
+                                        .read_text())
+    done = run_cli("bench", "--setups", "mine.yaml", "--strategies", "opm", "--trials", "1",
+                   "--backend", "kinematic", "--no-plots", "--out", "out", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-2000:]
+    again = run_cli("report", str(tmp_path / "out"), cwd=ROOT)
+    assert again.returncode == 0, again.stderr
+    page = (tmp_path / "out" / "report.html").read_text()
+    assert "setup file was not found" not in page and "map-breakfast-for-one" in page

@@ -84,7 +84,8 @@ class TrialStore:
         checked_file(self.path, "results")
         with self.path.open("rb") as handle:
             data = handle.read()
-        text = data[:self._records_end(data)].decode("utf-8", errors="replace")
+        # (utf-8-sig: a byte-order mark, as a spreadsheet saves one, is not in a column name)
+        text = data[:self._records_end(data)].decode("utf-8-sig", errors="replace")
         rows: list[dict[str, str]] = []
         seen: set[tuple[str, ...]] = set()
         reader = csv.DictReader(io.StringIO(text, newline=""))
@@ -130,7 +131,7 @@ class TrialStore:
                                 f"{RESULTS_FORMAT}; "
                                 "expected a new --out folder (`cramlite report` still shows "
                                 "the old one)")
-        with self.path.open(newline="") as handle:
+        with self.path.open(newline="", encoding="utf-8-sig") as handle:
             header = next(csv.reader(handle), [])
         if header != COLUMNS:
             raise StoreMismatch(f"{self.path} has other columns (written by another cramlite "
@@ -214,7 +215,8 @@ class TrialStore:
         data = {"results_format": RESULTS_FORMAT,
                 "written": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "python": sys.version,
                 "platform": platform.platform(), "host": platform.node(), "executor": executor,
-                "versions": versions, "arguments": args, "batch": list(batch)}
+                "versions": versions, "arguments": args, "cwd": os.getcwd(),
+                "batch": list(batch)}
         runs = []
         meta = self.folder / "metadata.json"
         if meta.exists():

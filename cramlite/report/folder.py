@@ -131,7 +131,7 @@ def _rows(path: Path) -> list[dict[str, Any]]:
     src = str(path)
     checked_file(path, "results")
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # (a spreadsheet's BOM: fine)
     except UnicodeDecodeError:
         raise UserInputError("not UTF-8 text; expected the CSV `cramlite bench` writes",
                              source=src) from None
@@ -189,8 +189,11 @@ def _load_setups(folder: BenchFolder, arguments: dict[str, Any]) -> None:
     from cramlite.world.setup import load_setup
 
     candidates: dict[str, list[Any]] = {}
-    sources = [str(p) for p in sorted((folder.path / "setups").glob("*.yaml"))] + \
-        _names(arguments.get("setups"))
+    given = _names(arguments.get("setups"))
+    cwd = folder.metadata.get("cwd")  # (a path the bench was given relative to its folder)
+    if isinstance(cwd, str) and cwd:
+        given += [str(Path(cwd) / name) for name in given if not Path(name).is_absolute()]
+    sources = [str(p) for p in sorted((folder.path / "setups").glob("*.yaml"))] + given
     for source in sources:
         try:
             setup = load_setup(source)
