@@ -171,3 +171,14 @@ def test_a_results_file_saved_with_a_byte_order_mark_is_read(results, tmp_path) 
                    "--out", str(out))
     assert done.returncode == 0, done.stderr[-2000:]
     assert "(1 already in" in done.stderr
+
+
+@pytest.mark.parametrize("metadata", [None, b""])
+def test_a_folder_whose_metadata_is_missing_is_refused_saying_so(results, tmp_path,
+                                                                 metadata) -> None:
+    out = _tampered(results, tmp_path, "error", "")
+    if metadata is None:
+        (out / "metadata.json").unlink()
+    else:
+        (out / "metadata.json").write_bytes(metadata)
+    _one_line(run_cli(*BENCH, "--out", str(out)), "has a trials.csv but no metadata.json")

@@ -122,6 +122,11 @@ class TrialStore:
         name with other content (setup name -> this batch's content hash)."""
         if not self.path.exists() or self.path.stat().st_size == 0:
             return
+        meta = self.folder / "metadata.json"
+        if not meta.is_file() or meta.stat().st_size == 0:
+            raise StoreMismatch(f"{self.folder} has a trials.csv but no metadata.json beside "
+                                "it (or an empty one); expected the two files a bench writes "
+                                "(restore metadata.json, or use a new --out folder)")
         found = self.results_format()
         if found != RESULTS_FORMAT:
             raise StoreMismatch(f"{self.folder} holds results of format {found} (written by "
