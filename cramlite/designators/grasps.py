@@ -44,8 +44,9 @@ PALM_CLEARANCE_M = 0.01
 TOP_GRIP_M = 0.035
 FINGERTIP_FLOOR_M = 0.005
 #: A rim grasp's fingers cross a flat wall at most this far off its middle (see
-#: `Grasp._square_to_a_wall`; 5 degrees: fingertips at most ~1.5 mm inside the bowl).
-RIM_MAX_SQUINT_RAD = math.radians(5.0)
+#: `Grasp._square_to_a_wall`; 6 degrees: fingertips ~1.65 mm inside the bowl, 2 mm at
+#: about 8: the IK's rotation tolerance, 0.6 degrees, stays within the limit).
+RIM_MAX_SQUINT_RAD = math.radians(6.0)
 #: A rim grasp's fingertips reach this far below the rim.
 RIM_GRIP_M = 0.03
 #: A front grasp's tool yaw may differ from the robot's heading by at most this.
