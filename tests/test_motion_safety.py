@@ -96,12 +96,16 @@ def test_an_arm_motion_whose_straight_path_crosses_the_island_is_a_planned_detou
     assert found == [], [f.describe() for f in found]
 
 
+#: The planner with OMPL alone (no learned waypoints tried first), for OMPL's own tests.
+OMPL_ONLY = arm_planner.ArmPlannerOptions(waypoints=False)
+
+
 def test_ompl_plans_a_joint_space_path_around_the_island(world) -> None:
     with simulated_robot(world, seed=5) as ctx:
         stand_beside_island(ctx, world)
         names = list(RIGHT_ARM)
         scene = ctx.collisions.check(names)
-        planner = ArmMotionPlanner(ctx.limits)
+        planner = ArmMotionPlanner(ctx.limits, OMPL_ONLY)
         path = planner.plan(scene, np.array(BELOW_EDGE), np.array(OVER_TOP),
                             np.random.default_rng(0))
         assert path is not None and path.planned and len(path.vertices) >= 3
@@ -146,11 +150,12 @@ def test_a_search_that_found_no_path_is_not_repeated_finely(world, monkeypatch) 
     with simulated_robot(world, seed=5) as ctx:
         stand_beside_island(ctx, world)
         scene = ctx.collisions.check(list(RIGHT_ARM))
-        starved = RecordsSearches(ctx.limits, arm_planner.ArmPlannerOptions(max_work=40))
+        starved = RecordsSearches(ctx.limits, arm_planner.ArmPlannerOptions(max_work=40,
+                                                                            waypoints=False))
         assert starved.plan(scene, np.array(BELOW_EDGE), np.array(OVER_TOP),
                             np.random.default_rng(0)) is None
         assert starved.searches == [(arm_planner.PLANNING_MARGIN_M, False)]
-        replanned = RecordsSearches(ctx.limits, colliding_first=True)
+        replanned = RecordsSearches(ctx.limits, OMPL_ONLY, colliding_first=True)
         path = replanned.plan(scene, np.array(BELOW_EDGE), np.array(OVER_TOP),
                               np.random.default_rng(0))
         assert replanned.searches == [(arm_planner.PLANNING_MARGIN_M, True), (0.0, True)]
@@ -164,7 +169,7 @@ def test_a_slower_machine_plans_the_same_arm_path(world) -> None:
     with simulated_robot(world, seed=5) as ctx:
         stand_beside_island(ctx, world)
         scene = ctx.collisions.check(list(RIGHT_ARM))
-        planner = ArmMotionPlanner(ctx.limits)
+        planner = ArmMotionPlanner(ctx.limits, OMPL_ONLY)
         fast = planner.plan(scene, np.array(BELOW_EDGE), np.array(OVER_TOP),
                             np.random.default_rng(0))
         assert fast is not None and fast.planned
@@ -198,7 +203,7 @@ def test_ompls_motions_checked_as_batches_get_the_answers_of_state_by_state_chec
     state-by-state motion checks."""
     with simulated_robot(world, seed=5) as ctx:
         stand_beside_island(ctx, world)
-        planner = ArmMotionPlanner(ctx.limits)
+        planner = ArmMotionPlanner(ctx.limits, OMPL_ONLY)
         steps = ctx.limits.max_steps(tuple(RIGHT_ARM))
         every = planner.options.check_every_steps
         space = ob.RealVectorStateSpace(len(steps))
