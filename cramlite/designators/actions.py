@@ -63,6 +63,11 @@ RESTING_HEIGHT_TOLERANCE_M = 0.01
 PARKED_TOLERANCE_RAD = 1e-3
 #: Spacing of the points that outline a carried object's footprint (the map has 1 cm cells).
 FOOTPRINT_SPACING_M = 0.01
+#: The points of what sticks out inside its outline (a link's mesh vertices seen from
+#: above, thousands of them) are kept on a grid this fine in the robot's frame, one point a
+#: cell: each moves by at most 7 mm, well within the map's 2 cm margin, and where an outline
+#: meets the furniture the exact check decides anyway (`update_carried`).
+STICK_OUT_GRID_M = 0.01
 
 
 def check_resting_place(ctx: RobotContext, obj: str, point: Vec3) -> None:
@@ -657,7 +662,8 @@ def _stick_out(points: np.ndarray, square: float, groups: dict[float, list[np.nd
     bucket = math.floor(float(points[out, 2].min()) * 20) / 20  # 5 cm: few maps
     outline = footprint_outline(points[:, :2], FOOTPRINT_SPACING_M)
     outline = outline[np.any(np.abs(outline) > square, axis=1)]
-    groups.setdefault(bucket, []).append(np.vstack([outline, points[out, :2]]))
+    inside = unique_rows(np.round(points[out, :2] / STICK_OUT_GRID_M) * STICK_OUT_GRID_M)
+    groups.setdefault(bucket, []).append(np.vstack([outline, inside]))
 
 
 def _upper_body_outline(ctx: RobotContext, arms: set[str]) -> dict[float, np.ndarray]:
@@ -684,7 +690,8 @@ def _part_outline(ctx: RobotContext, links: list[int]) -> dict[float, np.ndarray
     groups: dict[float, list[np.ndarray]] = {}
     for points in upper_body_points(ctx.scene, links):  # (the base at the origin)
         _stick_out(points, ctx.checker.half_size_m, groups)
-    return {b: np.vstack(p) for b, p in groups.items()}
+    # (the links' points on the grid: one a cell, also where two links overlap)
+    return {b: unique_rows(np.vstack(p)) for b, p in groups.items()}
 
 
 #: Outlines of the arms (and torso and head) kept for the process, at most 5 000.
