@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cramlite.errors import UserInputError
 from cramlite.motion import arm_planner
 from cramlite.motion.arm_planner import WAYPOINT_JOINTS, WAYPOINTS_FILE, ArmMotionPlanner
 from cramlite.trial import TrialRunner
@@ -128,9 +129,14 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=WAYPOINTS_FILE)
     args = parser.parse_args()
     first, _, last = args.seeds.partition("-")
+    if not (first.isdigit() and (last.isdigit() or not last)) or int(last or first) < int(first):
+        parser.error(f"--seeds: expected a range such as 1-4, not {args.seeds!r}")
     seeds = list(range(int(first), int(last or first) + 1))
     setups = args.setups.split(",")
-    queries = record(setups, seeds)
+    try:
+        queries = record(setups, seeds)
+    except UserInputError as exc:  # (a setup that is not there, say)
+        parser.error(str(exc))
     chosen, share = choose(queries, args.min_share)
     found = sum(q.vertices is not None for q in queries)
     print(f"{len(queries)} OMPL searches ({found} found a path), {len(chosen)} waypoints "
