@@ -65,6 +65,14 @@ def main() -> None:
                          "(Debian/Ubuntu: apt install valgrind)")
     if args.warm < 1:
         raise SystemExit("bench_instructions: --warm must be at least 1")
+    from cramlite.errors import UserInputError
+    from cramlite.world import load_setup
+
+    for setup in args.setups.split(","):  # (named before minutes under valgrind)
+        try:
+            load_setup(setup)
+        except UserInputError as exc:
+            raise SystemExit(f"bench_instructions: {exc}") from None
     for setup in args.setups.split(","):
         first = instructions([sys.executable, "-c", TRIALS, setup, "1"])
         more = instructions([sys.executable, "-c", TRIALS, setup, str(1 + args.warm)])

@@ -112,7 +112,7 @@ def choose(queries: list[Query], min_share: float,
     while len(candidates):
         gain = (covers & ~covered) @ work
         best = int(np.argmax(gain))
-        if gain[best] < min_share * work.sum():
+        if gain[best] <= 0 or gain[best] < min_share * work.sum():
             break
         chosen.append(candidates[best])
         covered |= covers[best]
@@ -126,8 +126,17 @@ def main() -> None:
     parser.add_argument("--seeds", default="1-4", help="a range, e.g. 1-4")
     parser.add_argument("--min-share", type=float, default=0.005,
                         help="stop when a waypoint would cover less of the OMPL work")
-    parser.add_argument("--out", type=Path, default=WAYPOINTS_FILE)
+    parser.add_argument("--out", type=Path, default=None,
+                        help="where to write (default: the shipped file, and only when "
+                             "learned from the default setups and seeds)")
     args = parser.parse_args()
+    if not 0 < args.min_share < 1:
+        parser.error(f"--min-share: expected a share between 0 and 1, not {args.min_share}")
+    if args.out is None:
+        if args.setups != ",".join(SETUPS) or args.seeds != "1-4":
+            parser.error("give --out: waypoints learned from other setups or seeds would "
+                         f"replace the shipped {WAYPOINTS_FILE.name}")
+        args.out = WAYPOINTS_FILE
     first, _, last = args.seeds.partition("-")
     if not (first.isdigit() and (last.isdigit() or not last)) or int(last or first) < int(first):
         parser.error(f"--seeds: expected a range such as 1-4, not {args.seeds!r}")

@@ -65,8 +65,8 @@ PARKED_TOLERANCE_RAD = 1e-3
 FOOTPRINT_SPACING_M = 0.01
 #: The points of what sticks out inside its outline (a link's mesh vertices seen from
 #: above, thousands of them) are kept on a grid this fine in the robot's frame, one point a
-#: cell: each moves by at most 7 mm, well within the map's 2 cm margin, and where an outline
-#: meets the furniture the exact check decides anyway (`update_carried`).
+#: cell: each moves by at most 7.1 mm, well within the map's 2 cm margin, and where an
+#: outline meets the furniture the exact check decides anyway (`update_carried`).
 STICK_OUT_GRID_M = 0.01
 
 

@@ -127,7 +127,8 @@ class _SegmentChecks(ob.MotionValidator):
 
 @dataclass(frozen=True)
 class JointPath:
-    """A checked polyline in joint space: vertices (k x n); `planned` if OMPL made it."""
+    """A checked polyline in joint space: vertices (k x n); `planned` if it is not the
+    straight path (a detour through a learned waypoint, or OMPL's)."""
 
     names: tuple[str, ...]
     vertices: np.ndarray
