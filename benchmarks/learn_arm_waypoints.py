@@ -27,7 +27,8 @@ import numpy as np
 
 from cramlite.errors import UserInputError
 from cramlite.motion import arm_planner
-from cramlite.motion.arm_planner import WAYPOINT_JOINTS, WAYPOINTS_FILE, ArmMotionPlanner
+from cramlite.motion.arm_planner import WAYPOINTS_FILE, ArmMotionPlanner
+from cramlite.motion.ik import ARM_JOINTS
 from cramlite.trial import TrialRunner
 
 SETUPS = ("v1", "v2", "v3", "v4", "v5", "c1", "c2", "c3")
@@ -57,12 +58,13 @@ def record(setups: list[str], seeds: list[int]) -> list[Query]:
         work = scene.checks + scene.narrow
         vertices = search(self, scene, start, goal, steps, seed, every, margin)
         names = tuple(scene.joints)
-        if margin and len(names) == len(WAYPOINT_JOINTS):
+        if margin and len(names) == len(ARM_JOINTS):
             queries.append(Query(self, scene, names, start.copy(), goal.copy(), steps.copy(),
                                  scene.checks + scene.narrow - work,
                                  None if vertices is None else vertices.copy()))
         return vertices
 
+    learned = arm_planner.arm_waypoints
     ArmMotionPlanner._ompl = recorded
     arm_planner.arm_waypoints = lambda: {}  # (OMPL asked every time, as with none)
     try:
@@ -73,11 +75,9 @@ def record(setups: list[str], seeds: list[int]) -> list[Query]:
                         runner.run(strategy, seed=seed)
     finally:
         ArmMotionPlanner._ompl = search
-        arm_planner.arm_waypoints = LEARNED
+        arm_planner.arm_waypoints = learned
     return queries
 
-
-LEARNED = arm_planner.arm_waypoints
 
 
 def tidy(names: tuple[str, ...], q: np.ndarray, planner: ArmMotionPlanner) -> np.ndarray:
@@ -90,12 +90,8 @@ def tidy(names: tuple[str, ...], q: np.ndarray, planner: ArmMotionPlanner) -> np
 
 
 def solves(query: Query, waypoint: np.ndarray) -> bool:
-    arm_planner.arm_waypoints = lambda: {query.names: (waypoint,)}
-    try:
-        return query.planner._via_waypoint(query.scene, query.names, query.start,
-                                           query.goal, query.steps) is not None
-    finally:
-        arm_planner.arm_waypoints = LEARNED
+    return query.planner._via_waypoint(query.scene, query.names, query.start, query.goal,
+                                       query.steps, (waypoint,)) is not None
 
 
 def choose(queries: list[Query], min_share: float,
@@ -154,7 +150,7 @@ def main() -> None:
     for names, waypoint in chosen:
         arms[names[0][:1]].append([float(v) for v in waypoint])
     about = {"about": "Arm waypoints the arm planner tries before OMPL, in order; joints: "
-                      + ", ".join(WAYPOINT_JOINTS) + " (rad). Written by "
+                      + ", ".join(ARM_JOINTS) + " (rad). Written by "
                       "benchmarks/learn_arm_waypoints.py.",
              "learned_from": {"setups": setups, "seeds": seeds,
                               "strategies": list(STRATEGIES), "searches": len(queries),

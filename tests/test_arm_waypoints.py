@@ -12,12 +12,13 @@ import pytest
 
 from cramlite.designators import simulated_robot
 from cramlite.motion import arm_planner
-from cramlite.motion.arm_planner import WAYPOINT_JOINTS, WAYPOINTS_FILE, ArmMotionPlanner
+from cramlite.motion.arm_planner import WAYPOINTS_FILE, ArmMotionPlanner
+from cramlite.motion.ik import arm_joint_names
 from cramlite.motion.trajectory import densify
 from cramlite.trial import TrialRunner
 from cramlite.world import load_setup
 
-RIGHT_ARM = tuple(f"r_{j}" for j in WAYPOINT_JOINTS)
+RIGHT_ARM = tuple(arm_joint_names("right"))
 #: Facing the island from 42 cm: the hand below the edge, and above the top behind it
 #: (their straight path goes 7.7 cm deep through the island).
 BELOW_EDGE = np.array((-1.263, 0.984, -2.406, -2.07, 1.964, -1.249, -1.611))
@@ -105,7 +106,7 @@ def test_the_shipped_waypoints_are_arm_poses_within_the_limits() -> None:
     with simulated_robot(load_setup("v1"), backend="kinematic") as ctx:
         limits = ctx.limits
     shipped = arm_planner.arm_waypoints()
-    assert set(shipped) == {RIGHT_ARM, tuple(f"l_{j}" for j in WAYPOINT_JOINTS)}
+    assert set(shipped) == {RIGHT_ARM, tuple(arm_joint_names("left"))}
     for names, waypoints in shipped.items():
         assert waypoints
         for w in waypoints:

@@ -662,7 +662,7 @@ def _stick_out(points: np.ndarray, square: float, groups: dict[float, list[np.nd
     bucket = math.floor(float(points[out, 2].min()) * 20) / 20  # 5 cm: few maps
     outline = footprint_outline(points[:, :2], FOOTPRINT_SPACING_M)
     outline = outline[np.any(np.abs(outline) > square, axis=1)]
-    inside = unique_rows(np.round(points[out, :2] / STICK_OUT_GRID_M) * STICK_OUT_GRID_M)
+    inside = np.round(points[out, :2] / STICK_OUT_GRID_M) * STICK_OUT_GRID_M
     groups.setdefault(bucket, []).append(np.vstack([outline, inside]))
 
 

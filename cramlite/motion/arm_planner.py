@@ -30,6 +30,7 @@ from ompl import geometric as og
 from ompl import util as ou
 
 from cramlite.motion.budget import CheckBudget
+from cramlite.motion.ik import ARMS, arm_joint_names, arm_prefix
 from cramlite.motion.trajectory import JointLimits, densify
 from cramlite.scene.collision import MotionCheck as CollisionScene
 
@@ -63,21 +64,17 @@ class ArmPlannerOptions:
     waypoints: bool = True
 
 
-#: The arm joints a waypoint gives values to, in order (with the arm's prefix).
-WAYPOINT_JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "upper_arm_roll_joint",
-                   "elbow_flex_joint", "forearm_roll_joint", "wrist_flex_joint",
-                   "wrist_roll_joint")
 WAYPOINTS_FILE = Path(__file__).with_name("arm_waypoints.json")
 
 
 @functools.cache
 def arm_waypoints() -> dict[tuple[str, ...], tuple[np.ndarray, ...]]:
-    """The learned waypoints of each arm, keyed by its joints' names (`WAYPOINT_JOINTS`
-    with the arm's prefix), in the order they are tried."""
+    """The learned waypoints of each arm (values of its seven joints, `arm_joint_names`
+    order), keyed by those joints' names, in the order they are tried."""
     data = json.loads(WAYPOINTS_FILE.read_text(encoding="utf-8"))
-    return {tuple(f"{prefix}_{j}" for j in WAYPOINT_JOINTS):
-            tuple(np.array(w, dtype=float) for w in data["arms"][prefix])
-            for prefix in ("r", "l")}
+    return {tuple(arm_joint_names(arm)):
+            tuple(np.array(w, dtype=float) for w in data["arms"][arm_prefix(arm)])
+            for arm in ARMS}
 
 
 #: Planners that check motions only whole (OMPL's `checkMotion(s1, s2)`), so that
@@ -210,12 +207,14 @@ class ArmMotionPlanner:
         return None
 
     def _via_waypoint(self, scene: CollisionScene, names: tuple[str, ...], start: np.ndarray,
-                      goal: np.ndarray, steps: np.ndarray) -> np.ndarray | None:
-        """start, waypoint, goal: through the first of the arm's waypoints from which both
-        legs are free, every state checked (None if none is, or the motion moves other
-        joints than one arm's seven). A continuous joint's waypoint is taken at the turn
-        that moves it least, start to goal."""
-        waypoints = arm_waypoints().get(names)
+                      goal: np.ndarray, steps: np.ndarray,
+                      waypoints: Sequence[np.ndarray] | None = None) -> np.ndarray | None:
+        """start, waypoint, goal: through the first of the arm's waypoints (or of
+        `waypoints`) from which both legs are free, every state checked (None if none is,
+        or the motion moves other joints than one arm's seven). A continuous joint's
+        waypoint is taken at the turn that moves it least, start to goal."""
+        if waypoints is None:
+            waypoints = arm_waypoints().get(names)
         if not waypoints:
             return None
         limits = self.limits
