@@ -76,7 +76,9 @@ class IKSolution:
 
 
 class ArmIK:
-    """IK for one arm (optionally with the torso) in the robot's base_footprint frame."""
+    """IK for one arm (optionally with the torso) in the robot's base_footprint frame.
+    One thread at a time: a solve works in the solver's own Pinocchio data (and what a
+    descent from a seeded start finds is kept, see `_descend_from_seed`)."""
 
     def __init__(self, arm: str, with_torso: bool = True, options: IKOptions | None = None):
         self.arm = arm
@@ -247,9 +249,10 @@ class ArmIK:
                            preferred_torso_m: float | None,
                            fixed_torso: bool) -> IKSolution | None:
         """`_descend` from a start that is not drawn at random, remembered: a pure function
-        of its arguments, and location designators ask the same ones again and again
-        (each trial of a setup starts as the last one did). The answer is the one the
-        descent gives, and no random number is drawn either way."""
+        of its arguments (and of the solver's model and options, fixed when it is made),
+        and location designators ask the same ones again and again (each trial of a setup
+        starts as the last one did). The answer is the one the descent gives, and no
+        random number is drawn either way."""
         key = (q0.tobytes(), target.homogeneous.tobytes(), preferred_torso_m, fixed_torso)
         result = self._seeded.get_or_compute(key, lambda: self._descend(
             q0, target, preferred_torso_m, fixed_torso=fixed_torso))
