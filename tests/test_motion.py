@@ -229,8 +229,7 @@ def test_seeded_descents_are_remembered_and_answer_as_a_fresh_solver_does() -> N
     from cramlite.motion.ik import ArmIK
 
     remembering, forgetting = ArmIK("right"), ArmIK("right")
-    forgetting._descend_from_seed = lambda q0, target, torso_m, fixed: forgetting._descend(
-        q0, target, torso_m, fixed_torso=fixed)
+    forgetting._descend_from_seed = forgetting._descend
     rng = np.random.default_rng(3)
     seeds = [{**remembering.from_q(remembering.random_q(rng)), "torso_lift_joint": 0.2}
              for _ in range(3)]

@@ -232,12 +232,9 @@ class ArmIK:
                 iq = self._torso[0]
                 q0[iq] = min(max(preferred_torso_m, self.model.lowerPositionLimit[iq]),
                              self.model.upperPositionLimit[iq])
-            if attempt == 0 and seed_joints:
-                result = self._descend_from_seed(q0, target, preferred_torso_m,
-                                                 torso is not None)
-            else:
-                result = self._descend(q0, target, preferred_torso_m,
-                                       fixed_torso=torso is not None)
+            descend = self._descend_from_seed if attempt == 0 and seed_joints \
+                else self._descend
+            result = descend(q0, target, preferred_torso_m, fixed_torso=torso is not None)
             if result is None:
                 continue
             if near_limits_ok or self._clear_of_limits(result.joints):
@@ -246,8 +243,8 @@ class ArmIK:
         return fallback
 
     def _descend_from_seed(self, q0: np.ndarray, target: pin.SE3,
-                           preferred_torso_m: float | None,
-                           fixed_torso: bool) -> IKSolution | None:
+                           preferred_torso_m: float | None = None,
+                           fixed_torso: bool = False) -> IKSolution | None:
         """`_descend` from a start that is not drawn at random, remembered: a pure function
         of its arguments (and of the solver's model and options, fixed when it is made),
         and location designators ask the same ones again and again (each trial of a setup
