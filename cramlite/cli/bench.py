@@ -261,6 +261,10 @@ def _run(args, strategies, setups, workers, out) -> int:
     def terminate(signum, frame):
         raise StopNow()
 
+    # (the summary's and the report's imports, while this process waits for the trials)
+    from cramlite.report.build import preload
+
+    preloading = preload(figures=not args.no_plots)
     previous = signal.signal(signal.SIGTERM, terminate)
     try:
         outcome = run_batch((spec for spec in plan if spec.key not in done), record,
@@ -271,6 +275,7 @@ def _run(args, strategies, setups, workers, out) -> int:
     finally:
         signal.signal(signal.SIGTERM, previous)
         progress.close()
+        preloading.join()
     rows = [r for r in store.rows() if plan.contains(row_key(r))]
     if outcome.interrupted:
         progress.say(f"{'terminated' if outcome.stopped_now else 'interrupted'}; {len(rows)} "
