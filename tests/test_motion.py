@@ -186,6 +186,43 @@ def test_footprint_check_agrees_with_every_point_looked_up(planner) -> None:
         assert 300 < blocked < 2700
 
 
+def test_footprints_checked_by_the_chunk_answer_as_one_pose_at_a_time(planner) -> None:
+    """`all_free` (a path's waypoints, checked a chunk at a time in numpy) gives the answer
+    of `is_free` asked pose by pose, and remembers the same answer for every pose it
+    decided: with something sticking out of the base (an outline ahead of it, checked
+    against the whole map) and an exact check that decides where that outline touches."""
+    _, shared = planner
+    ahead = np.array([[x, y] for x in np.linspace(0.36, 0.62, 8)
+                      for y in np.linspace(-0.2, 0.2, 6)])
+    asked: dict[str, list] = {"chunks": [], "alone": []}
+
+    def checker(log: list) -> FootprintChecker:
+        check = FootprintChecker(shared.occupancy)
+        check.set_carried([(ahead, None)],
+                          lambda x, y, yaw: log.append((x, y, yaw)) or math.sin(7 * x) > 0)
+        return check
+
+    chunks, alone = checker(asked["chunks"]), checker(asked["alone"])
+    bounds = shared.occupancy.bounds
+    rng = np.random.default_rng(11)
+    answers = []
+    for _ in range(300):
+        start = (rng.uniform(bounds.x_min, bounds.x_max),
+                 rng.uniform(bounds.y_min, bounds.y_max), rng.uniform(-math.pi, math.pi))
+        steps = rng.normal(0.0, [0.02, 0.02, 0.03], size=(int(rng.integers(1, 90)), 3))
+        path = [tuple(p) for p in np.asarray(start) + np.cumsum(steps, axis=0)]
+        expected = all(alone.is_free(*p) for p in path)
+        assert chunks.all_free(path) == expected
+        answers.append(expected)
+    assert 30 < sum(answers) < 270  # (free paths and blocked ones)
+    for key, free in chunks._known.items():
+        assert free == alone._is_free(*key[1:]), key
+    # (the exact check was asked where the outline touched, and let some of them pass)
+    touched = {tuple(round(v, 5) for v in pose) for pose in asked["chunks"]}
+    assert touched <= {key[1:] for key in alone._known}
+    assert any(chunks._known[(id(shared.occupancy), *pose)] for pose in touched)
+
+
 def test_the_convex_hull_is_the_counter_clockwise_corners_of_the_points() -> None:
     """convex_hull_2d on mesh-like point clouds (many points inside, duplicates, points
     along the edges): its corners are input points, every point lies within it, each

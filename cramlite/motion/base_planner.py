@@ -108,7 +108,7 @@ class BaseMotionPlanner:
     def _free_waypoints(self, vertices: Sequence[BasePose]) -> list[BasePose] | None:
         """The waypoints along these vertices, if every one is free."""
         waypoints = self._interpolate(vertices)
-        return waypoints if all(self.checker.is_free(*p) for p in waypoints) else None
+        return waypoints if self.checker.all_free(waypoints) else None
 
     def _repair(self, vertices: Sequence[BasePose], seed: int,
                 resolution: float) -> list[BasePose] | None:

@@ -20,6 +20,9 @@ from cramlite.world.pr2 import PR2_BASE_HALF_SIZE_M
 
 #: Base poses whose answer a checker remembers at most (then it starts afresh).
 KNOWN_POSES = 200_000
+#: Base poses checked together by `FootprintChecker.all_free` (a path's first blocked
+#: waypoint ends the check within a chunk).
+BATCH_POSES = 32
 #: Side of the cells of the clearance grid, in map cells (bounds within 6 cm).
 COARSE_CELLS = 4
 #: The clearance grid knows distances up to this far (m); beyond, only that they are
@@ -115,6 +118,24 @@ class OccupancyMap:
         slack = f * self.resolution * math.sqrt(2)
         upper = distance + slack if distance < CLEARANCE_HORIZON_M else math.inf
         return max(0.0, distance - slack), upper
+
+    def coarse_cells_of(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`coarse_cell` of each point (N x 2): two index arrays, -1 outside the map."""
+        cells = np.rint((xy - (self.bounds.x_min, self.bounds.y_min)) / self.resolution)
+        cells = cells.astype(np.intp)
+        inside = np.all((cells >= 0) & (cells < self.obstacles.shape), axis=1)
+        coarse = np.where(inside[:, None], cells // COARSE_CELLS, -1)
+        return coarse[:, 0], coarse[:, 1]
+
+    def clearance_bounds_of(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`clearance_bounds` of each point (N x 2): arrays of lower and upper bounds."""
+        i, j = self.coarse_cells_of(xy)
+        outside = i < 0
+        distance = self._coarse_clearance[np.maximum(i, 0), np.maximum(j, 0)]
+        slack = COARSE_CELLS * self.resolution * math.sqrt(2)
+        upper = np.where(distance < CLEARANCE_HORIZON_M, distance + slack, math.inf)
+        lower = np.maximum(0.0, distance - slack)
+        return np.where(outside, 0.0, lower), np.where(outside, 0.0, upper)
 
     def _cell(self, x: float, y: float) -> tuple[int, int]:
         return (int(round((x - self.bounds.x_min) / self.resolution)),
@@ -339,6 +360,76 @@ class FootprintChecker:
             # last bit of its floats, is free there too, even with a corner on a cell edge)
             known = self._known[key] = self._is_free(x, y, yaw)
         return known
+
+    def all_free(self, poses: Sequence[tuple[float, float, float]]) -> bool:
+        """`all(self.is_free(*p) for p in poses)`, the same answers (and remembered the
+        same way), with the poses not known yet checked a chunk at a time, in a few numpy
+        steps for the chunk (a path's waypoints: a base check costs ~20 us alone, mostly
+        numpy's per-call cost)."""
+        unknown: list[tuple[float, float, float]] = []
+        for x, y, yaw in poses:
+            pose = (round(x, 5), round(y, 5), round(yaw, 5))
+            known = self._known.get((id(self.occupancy), *pose))
+            if known is False:
+                # (a pose remembered blocked: those before it decide nothing more)
+                return self._chunks_free(unknown) and False
+            if known is None:
+                unknown.append(pose)
+        return self._chunks_free(unknown)
+
+    def _chunks_free(self, poses: list[tuple[float, float, float]]) -> bool:
+        for start in range(0, len(poses), BATCH_POSES):
+            chunk = poses[start:start + BATCH_POSES]
+            answers = self._batch_free(np.array(chunk))
+            for pose, free in zip(chunk, answers, strict=True):
+                if len(self._known) > KNOWN_POSES:
+                    self._known.clear()
+                self._known[(id(self.occupancy), *pose)] = free
+                if not free:
+                    return False
+        return True
+
+    def _batch_free(self, poses: np.ndarray) -> list[bool]:
+        """`_is_free` of each pose (N x 3, rounded as `is_free` rounds them), in order, up
+        to the first blocked one (the rest: False, not decided; the exact check is not
+        consulted for them)."""
+        self.checks += len(poses)
+        occupancy = self.occupancy
+        xy = poses[:, :2]
+        yaws = poses[:, 2].tolist()  # (math's cos and sin, as `_is_free`: the same bits)
+        c, s = np.array([math.cos(a) for a in yaws]), np.array([math.sin(a) for a in yaws])
+        rotation = np.stack([np.stack([c, s], -1), np.stack([-s, c], -1)], -2)  # N x 2 x 2
+        lower, upper = occupancy.clearance_bounds_of(xy)
+        free = upper >= self._sure_blocked
+        # the base's outline, where something may be within its reach (less the inside
+        # points within the clearance, as `_is_free` skips them: the same lookups)
+        pad = occupancy.margin + occupancy.resolution
+        check = free & (lower <= self._sure_free)
+        if check.any():
+            skipped = np.searchsorted(self._inside_radius_ascending, lower[check] - pad,
+                                      side="left")
+            kept = np.arange(len(self.outline))[None, :] < \
+                (len(self.outline) - skipped)[:, None]
+            points = self.outline @ rotation[check] + xy[check][:, None, :]
+            blocked = occupancy.blocked_at(points.reshape(-1, 2)).reshape(kept.shape)
+            free[check] = ~np.any(blocked & kept, axis=1)
+        touching = np.zeros(len(poses), dtype=bool)
+        for points, group_map, near in self.carried_groups:
+            i, j = group_map.coarse_cells_of(xy)
+            ask = free & ~touching & ((i < 0) | near[np.maximum(i, 0), np.maximum(j, 0)])
+            if ask.any():
+                moved = points @ rotation[ask] + xy[ask][:, None, :]
+                hit = group_map.blocked_at(moved.reshape(-1, 2)).reshape(moved.shape[:2])
+                touching[ask] = hit.any(axis=1)
+        out = []
+        for pose, ok, touch in zip(poses.tolist(), free.tolist(), touching.tolist(),
+                                   strict=True):
+            if ok and touch:  # the outlines over-approximate an arm: the exact check decides
+                ok = self.exact is not None and self.exact(*pose)
+            out.append(ok)
+            if not ok:
+                return out + [False] * (len(poses) - len(out))
+        return out
 
     def _is_free(self, x: float, y: float, yaw: float) -> bool:
         self.checks += 1
