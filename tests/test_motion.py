@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pinocchio as pin
@@ -142,6 +143,9 @@ def test_a_slower_machine_plans_the_same_base_path(planner) -> None:
             time.sleep(0.005)
             return self.inner.is_free(*pose)
 
+        def all_free(self, poses):
+            return all(self.is_free(*pose) for pose in poses)
+
     slow = BaseMotionPlanner(Slow(checker), base_planner.options)
     begin = time.perf_counter()
     again = slow.plan(start, goal, np.random.default_rng(3))
@@ -186,11 +190,18 @@ def test_footprint_check_agrees_with_every_point_looked_up(planner) -> None:
         assert 300 < blocked < 2700
 
 
-def test_footprints_checked_by_the_chunk_answer_as_one_pose_at_a_time(planner) -> None:
+@pytest.mark.parametrize("memory", [None, 50])
+def test_footprints_checked_by_the_chunk_answer_as_one_pose_at_a_time(
+        planner, memory, monkeypatch) -> None:
     """`all_free` (a path's waypoints, checked a chunk at a time in numpy) gives the answer
-    of `is_free` asked pose by pose, and remembers the same answer for every pose it
-    decided: with something sticking out of the base (an outline ahead of it, checked
-    against the whole map) and an exact check that decides where that outline touches."""
+    of `is_free` asked pose by pose, and remembers what it would (also where the memory
+    fills up and starts afresh within a path): with something sticking out of the base
+    (an outline ahead of it, checked against the whole map) and an exact check that
+    decides where that outline touches. Poses must be finite; far ones are outside."""
+    from cramlite.motion import footprint
+
+    if memory is not None:
+        monkeypatch.setattr(footprint, "KNOWN_POSES", memory)
     _, shared = planner
     ahead = np.array([[x, y] for x in np.linspace(0.36, 0.62, 8)
                       for y in np.linspace(-0.2, 0.2, 6)])
@@ -205,22 +216,59 @@ def test_footprints_checked_by_the_chunk_answer_as_one_pose_at_a_time(planner) -
     chunks, alone = checker(asked["chunks"]), checker(asked["alone"])
     bounds = shared.occupancy.bounds
     rng = np.random.default_rng(11)
-    answers = []
+    answers, before = [], []
     for _ in range(300):
         start = (rng.uniform(bounds.x_min, bounds.x_max),
                  rng.uniform(bounds.y_min, bounds.y_max), rng.uniform(-math.pi, math.pi))
         steps = rng.normal(0.0, [0.02, 0.02, 0.03], size=(int(rng.integers(1, 90)), 3))
         path = [tuple(p) for p in np.asarray(start) + np.cumsum(steps, axis=0)]
+        if before and rng.uniform() < 0.4:  # (poses asked before, amid new ones)
+            old = before[int(rng.integers(len(before)))]
+            cut = int(rng.integers(len(path) + 1))
+            path = path[:cut] + old[: int(rng.integers(1, len(old) + 1))] + path[cut:]
+        before.append(path)
         expected = all(alone.is_free(*p) for p in path)
         assert chunks.all_free(path) == expected
+        assert chunks._known == alone._known
         answers.append(expected)
     assert 30 < sum(answers) < 270  # (free paths and blocked ones)
     for key, free in chunks._known.items():
         assert free == alone._is_free(*key[1:]), key
     # (the exact check was asked where the outline touched, and let some of them pass)
     touched = {tuple(round(v, 5) for v in pose) for pose in asked["chunks"]}
-    assert touched <= {key[1:] for key in alone._known}
-    assert any(chunks._known[(id(shared.occupancy), *pose)] for pose in touched)
+    assert touched
+    assert any(free for key, free in chunks._known.items() if key[1:] in touched) or \
+        memory is not None
+    with pytest.raises(ValueError, match="finite"):
+        chunks.all_free([(0.0, 0.0, 0.0), (math.nan, 0.0, 0.0)])
+    far = [(1e18, -1e18, 0.0), (-1e300, 2.0, 1.0)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert chunks.all_free(far) is False and not any(alone.is_free(*p) for p in far)
+
+
+def test_footprints_checked_by_the_chunk_remember_what_one_by_one_would(
+        planner, monkeypatch) -> None:
+    """Where checking the new poses of a path fills the memory (it starts afresh) before
+    poses it knew from an earlier path, those are checked again and remembered, as one by
+    one they would be."""
+    from cramlite.motion import footprint
+
+    monkeypatch.setattr(footprint, "KNOWN_POSES", 10)
+    _, shared = planner
+    probe, chunks, alone = (FootprintChecker(shared.occupancy) for _ in range(3))
+    rng = np.random.default_rng(5)
+    bounds = shared.occupancy.bounds
+    free = []
+    while len(free) < 13:
+        pose = (round(rng.uniform(bounds.x_min, bounds.x_max), 5),
+                round(rng.uniform(bounds.y_min, bounds.y_max), 5), 0.0)
+        if probe._is_free(*pose):
+            free.append(pose)
+    earlier, later = free[:8], free[8:] + free[:8]
+    for path in (earlier, later):
+        assert chunks.all_free(path) and all(alone.is_free(*p) for p in path)
+        assert chunks._known == alone._known
 
 
 def test_the_convex_hull_is_the_counter_clockwise_corners_of_the_points() -> None:

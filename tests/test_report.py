@@ -206,6 +206,21 @@ def test_without_matplotlib_the_page_has_its_tables(bench_dir: Path, tmp_path) -
     assert "ObjectUnreachable" in plain
 
 
+def test_a_matplotlib_that_does_not_start_is_one_line_naming_mplbackend(bench_dir: Path,
+                                                                        tmp_path) -> None:
+    """MPLBACKEND naming no backend makes matplotlib refuse to import: `report` says so in
+    one line naming the variable (exit 2), with no traceback."""
+    import os
+
+    copy = tmp_path / "copy"
+    shutil.copytree(bench_dir, copy, ignore=shutil.ignore_patterns("report*", "traces"))
+    done = cli("report", str(copy), env={**os.environ, "MPLBACKEND": "nosuch"})
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "MPLBACKEND=nosuch" in lines[0], lines
+
+
 @pytest.mark.parametrize("case, expected", [
     ("missing", "no such folder; expected a results folder"),
     ("file", "is a file; expected a results folder"),

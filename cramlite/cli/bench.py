@@ -275,13 +275,13 @@ def _run(args, strategies, setups, workers, out) -> int:
     finally:
         signal.signal(signal.SIGTERM, previous)
         progress.close()
-        preloading.join()
     rows = [r for r in store.rows() if plan.contains(row_key(r))]
-    if outcome.interrupted:
+    if outcome.interrupted:  # (at once: the imports' thread is a daemon, left to stop)
         progress.say(f"{'terminated' if outcome.stopped_now else 'interrupted'}; {len(rows)} "
                      f"of {total} trials are in {store.path}. Run the same command again to "
                      f"finish the rest (`cramlite report {out}` shows what is there).")
         return EXIT_TERMINATED if outcome.stopped_now else 130
+    preloading.join()
     from cramlite.bench.labels import by_backend
 
     rows = by_backend(rows)  # (several backends: each strategy labelled with its own)

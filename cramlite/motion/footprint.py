@@ -122,8 +122,9 @@ class OccupancyMap:
     def coarse_cells_of(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """`coarse_cell` of each point (N x 2): two index arrays, -1 outside the map."""
         cells = np.rint((xy - (self.bounds.x_min, self.bounds.y_min)) / self.resolution)
-        cells = cells.astype(np.intp)
         inside = np.all((cells >= 0) & (cells < self.obstacles.shape), axis=1)
+        # (compared as floats, cast where inside: a far point's index would overflow)
+        cells = np.where(inside[:, None], cells, 0.0).astype(np.intp)
         coarse = np.where(inside[:, None], cells // COARSE_CELLS, -1)
         return coarse[:, 0], coarse[:, 1]
 
@@ -365,17 +366,25 @@ class FootprintChecker:
         """`all(self.is_free(*p) for p in poses)`, the same answers (and remembered the
         same way), with the poses not known yet checked a chunk at a time, in a few numpy
         steps for the chunk (a path's waypoints: a base check costs ~20 us alone, mostly
-        numpy's per-call cost)."""
-        unknown: list[tuple[float, float, float]] = []
+        numpy's per-call cost). Poses must be finite (ValueError)."""
+        pending: list[tuple[float, float, float]] = []
         for x, y, yaw in poses:
+            if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(yaw)):
+                raise ValueError(f"a base pose must be finite, not {(x, y, yaw)}")
             pose = (round(x, 5), round(y, 5), round(yaw, 5))
-            known = self._known.get((id(self.occupancy), *pose))
+            key = (id(self.occupancy), *pose)
+            if key in self._known:
+                # (the poses before it first, as one by one: what is remembered is then as
+                # one by one would find it, even where checking them fills the memory)
+                if pending and not self._chunks_free(pending):
+                    return False
+                pending = []
+            known = self._known.get(key)
             if known is False:
-                # (a pose remembered blocked: those before it decide nothing more)
-                return self._chunks_free(unknown) and False
+                return False
             if known is None:
-                unknown.append(pose)
-        return self._chunks_free(unknown)
+                pending.append(pose)
+        return self._chunks_free(pending)
 
     def _chunks_free(self, poses: list[tuple[float, float, float]]) -> bool:
         for start in range(0, len(poses), BATCH_POSES):

@@ -91,13 +91,15 @@ def preload(figures: bool = True) -> threading.Thread:
     calls it before its trials, while this process only waits for its workers, so that the
     ~1.2 s these imports take is not spent after the last trial. Join the thread before
     building the report (pictures are drawn on forked processes only when no other thread
-    runs). An import that fails here fails again where it is needed, with its message."""
+    runs); a bench that is interrupted does not wait for it (a daemon). An import that
+    fails here fails again where it is needed, with its message, and prints nothing
+    here."""
 
     def work() -> None:
         with contextlib.suppress(Exception):
             from scipy import stats  # noqa: F401
-        if figures and have_matplotlib():
-            with contextlib.suppress(Exception):
+        with contextlib.suppress(Exception):  # (e.g. MPLBACKEND naming no backend)
+            if figures and have_matplotlib():
                 import cramlite.bench.plots  # noqa: F401
                 import cramlite.report.figures
                 import cramlite.world.topdown  # noqa: F401
@@ -110,10 +112,16 @@ def preload(figures: bool = True) -> threading.Thread:
 
 
 def have_matplotlib() -> bool:
+    """Whether matplotlib is installed (an environment it refuses to start in, e.g.
+    MPLBACKEND naming no backend, is the user's to fix: UserInputError)."""
     try:
         import matplotlib  # noqa: F401
     except ImportError:
         return False
+    except ValueError as exc:  # (matplotlib checks its settings, MPLBACKEND's too, on import)
+        raise UserInputError(f"matplotlib does not start: {exc}",
+                             source="the environment" if "MPLBACKEND" not in os.environ
+                             else f"MPLBACKEND={os.environ['MPLBACKEND']}") from None
     return True
 
 
