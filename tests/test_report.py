@@ -436,27 +436,3 @@ def test_a_report_run_from_elsewhere_finds_a_setup_named_relative_to_the_bench(
     assert again.returncode == 0, again.stderr
     page = (tmp_path / "out" / "report.html").read_text()
     assert "setup file was not found" not in page and "map-breakfast-for-one" in page
-
-
-def test_a_bench_imports_what_its_report_needs_while_the_trials_run(tmp_path) -> None:
-    """scipy.stats and matplotlib (~1.2 s to import) are imported on a thread while the
-    workers run the trials, not after the last one: by the time the trials start, a thread
-    is importing them (a fresh interpreter: this one has both)."""
-    code = """
-import os, sys, threading
-import cramlite.bench.execute as execute
-def trials(*args, **kwargs):  # (instead of the trials: what is imported by their end)
-    preloading = [t for t in threading.enumerate() if t.name == "cramlite-preload"]
-    for thread in preloading:
-        thread.join(120)
-    print(len(preloading), "scipy.stats" in sys.modules, "matplotlib.pyplot" in sys.modules,
-          flush=True)
-    os._exit(0)
-execute.run_batch = trials
-from cramlite.cli import main
-main(["bench", "--setups", "v1", "--trials", "1", "--out", sys.argv[1]])
-"""
-    done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "out")],
-                          capture_output=True, text=True, cwd=ROOT, timeout=300)
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.split() == ["1", "True", "True"]

@@ -261,10 +261,6 @@ def _run(args, strategies, setups, workers, out) -> int:
     def terminate(signum, frame):
         raise StopNow()
 
-    # (the summary's and the report's imports, while this process waits for the trials)
-    from cramlite.report.build import preload
-
-    preloading = preload(figures=not args.no_plots)
     previous = signal.signal(signal.SIGTERM, terminate)
     try:
         outcome = run_batch((spec for spec in plan if spec.key not in done), record,
@@ -276,12 +272,11 @@ def _run(args, strategies, setups, workers, out) -> int:
         signal.signal(signal.SIGTERM, previous)
         progress.close()
     rows = [r for r in store.rows() if plan.contains(row_key(r))]
-    if outcome.interrupted:  # (at once: the imports' thread is a daemon, left to stop)
+    if outcome.interrupted:
         progress.say(f"{'terminated' if outcome.stopped_now else 'interrupted'}; {len(rows)} "
                      f"of {total} trials are in {store.path}. Run the same command again to "
                      f"finish the rest (`cramlite report {out}` shows what is there).")
         return EXIT_TERMINATED if outcome.stopped_now else 130
-    preloading.join()
     from cramlite.bench.labels import by_backend
 
     rows = by_backend(rows)  # (several backends: each strategy labelled with its own)

@@ -3,10 +3,8 @@
 
 from __future__ import annotations
 
-import contextlib
 import fnmatch
 import os
-import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -83,32 +81,6 @@ def build_report(folder: str | Path, *, figures: bool = True,
         raise UserInputError(f"cannot write the report ({exc.strerror or exc})",
                              source=str(out)) from None
     return out
-
-
-def preload(figures: bool = True) -> threading.Thread:
-    """Import what the summary and the report need (scipy.stats, and matplotlib with the
-    report's drawing modules when `figures`) on a thread of its own, started here: a bench
-    calls it before its trials, while this process only waits for its workers, so that the
-    ~1.2 s these imports take is not spent after the last trial. Join the thread before
-    building the report (pictures are drawn on forked processes only when no other thread
-    runs); a bench that is interrupted does not wait for it (a daemon). An import that
-    fails here fails again where it is needed, with its message, and prints nothing
-    here."""
-
-    def work() -> None:
-        with contextlib.suppress(Exception):
-            from scipy import stats  # noqa: F401
-        with contextlib.suppress(Exception):  # (e.g. MPLBACKEND naming no backend)
-            if figures and have_matplotlib():
-                import cramlite.bench.plots  # noqa: F401
-                import cramlite.report.figures
-                import cramlite.world.topdown  # noqa: F401
-
-                cramlite.report.figures.pyplot()
-
-    thread = threading.Thread(target=work, name="cramlite-preload", daemon=True)
-    thread.start()
-    return thread
 
 
 def have_matplotlib() -> bool:
