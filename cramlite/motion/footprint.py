@@ -355,12 +355,17 @@ class FootprintChecker:
         key = (id(self.occupancy), x, y, yaw)
         known = self._known.get(key)
         if known is None:
-            if len(self._known) > KNOWN_POSES:
-                self._known.clear()
             # (of the pose to 10 um: a base that reaches a goal checked free, up to the
             # last bit of its floats, is free there too, even with a corner on a cell edge)
-            known = self._known[key] = self._is_free(x, y, yaw)
+            known = self._remember(key, self._is_free(x, y, yaw))
         return known
+
+    def _remember(self, key: tuple, free: bool) -> bool:
+        """Keep a pose's answer (the memory starts afresh when full); returns it."""
+        if len(self._known) > KNOWN_POSES:
+            self._known.clear()
+        self._known[key] = free
+        return free
 
     def all_free(self, poses: Sequence[tuple[float, float, float]]) -> bool:
         """`all(self.is_free(*p) for p in poses)`, the same answers (and remembered the
@@ -391,10 +396,7 @@ class FootprintChecker:
             chunk = poses[start:start + BATCH_POSES]
             answers = self._batch_free(np.array(chunk))
             for pose, free in zip(chunk, answers, strict=True):
-                if len(self._known) > KNOWN_POSES:
-                    self._known.clear()
-                self._known[(id(self.occupancy), *pose)] = free
-                if not free:
+                if not self._remember((id(self.occupancy), *pose), free):
                     return False
         return True
 
