@@ -21,7 +21,7 @@ needs_pybullet = pytest.mark.skipif(not HAS_PYBULLET, reason=NO_PYBULLET)
 
 #: Modules of end-to-end tests (whole trials, benches, venvs, trained models): marked slow,
 #: left out of `make test-quick` (the full suite, `make test`, runs them; CI too).
-SLOW_MODULES = {"test_python313", "test_backends", "test_bench", "test_storage", "test_trials",
+SLOW_MODULES = {"test_other_pythons", "test_backends", "test_bench", "test_storage", "test_trials",
                 "test_report", "test_learning", "test_user_plans", "test_results_files",
                 "test_packaging", "test_planning_scene", "test_motion_safety",
                 "test_manipulation", "test_physics_check", "test_dask", "test_process_cache",
@@ -32,6 +32,7 @@ SLOW_MODULES = {"test_python313", "test_backends", "test_bench", "test_storage",
 #: spread over the cores (pytest-xdist), none of them is left to run alone at the end.
 LONGEST_FIRST = ("test_the_readme_tour_runs_as_written",
                  "test_the_wheel_installs_on_python_313",
+                 "test_the_wheel_installs_from_wheels_only_and_runs_on_python",
                  "test_the_broadphase_misses_no_penetration",
                  "test_dask_on_a_threaded_worker", "test_all_orders_and_random_setups",
                  "test_two_simulators_agree_on_orders_success_and_where_items_settle",

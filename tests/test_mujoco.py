@@ -119,7 +119,7 @@ def test_show_and_a_replayed_gif_render_with_mujoco(tmp_path: Path) -> None:
     with Image.open(png) as image:
         pixels = np.asarray(image.convert("RGB"))
     assert pixels.shape == (240, 320, 3) and pixels.std() > 20  # (a scene, not a blank)
-    # a trial on mujoco, its trace (`replay --check` of one: tests/test_python313.py) and
+    # a trial on mujoco, its trace (`replay --check` of one: tests/test_other_pythons.py) and
     # a GIF of a short trace drawn by MuJoCo, one frame per tenth of a second
     from tests.test_trace import write
 
