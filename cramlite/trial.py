@@ -45,7 +45,8 @@ class TrialResult:
     order: list[str]
     failures: list[dict[str, Any]]
     base_path_m: float  #: length of the base paths actually driven
-    straight_line_m: float  #: sum of straight xy legs robot -> item -> goal
+    #: sum of straight xy legs robot -> item -> goal (None: a user's plan reported none)
+    straight_line_m: float | None
     wall_s: float  #: the host's compute time: planning and executing (loading excluded)
     drive_s: float  #: robot time of the executed base trajectories
     arm_s: float  #: robot time of the executed arm, torso and gripper trajectories
@@ -160,7 +161,7 @@ class TrialRunner:
         return TrialResult(
             setup=self.setup.name, plan=plan, strategy=strategy, seed=seed, success=success,
             order=report.order, failures=[f.as_dict() for f in report.failures],
-            base_path_m=round(ctx.base_path_m, 6), straight_line_m=round(report.straight_line_m, 6),
+            base_path_m=round(ctx.base_path_m, 6), straight_line_m=_legs(report, plan),
             wall_s=wall_s, drive_s=round(ctx.drive_s, 6), arm_s=round(ctx.arm_s, 6),
             robot_time_s=round(ctx.time_s, 6), task_time_s=round(ctx.time_s + wall_s, 6),
             backend=self.backend.name, items=items,
@@ -228,6 +229,15 @@ class TrialRunner:
         # every drawer and door is closed again
         success &= all(abs(v) < 1e-3 for v in self.modules.world_joint_positions().values())
         return items, success
+
+
+def _legs(report: PlanReport, plan: str) -> float | None:
+    """The straight-line legs a plan reported: a built-in plan that fetched nothing drove
+    none (0 m); a user's plan that never reported any (`PlanReport.add_leg`): None, not a
+    distance of 0 that summaries and tests would take for one."""
+    if report.straight_line_m is None:
+        return 0.0 if is_builtin(plan) else None
+    return round(float(report.straight_line_m), 6)
 
 
 def _as_report(value: Any, plan: str) -> PlanReport:

@@ -151,6 +151,34 @@ def test_bench_runs_resumes_and_reports_a_plan_file_keyed_by_its_content(
     assert "4 trials in trials.csv" in page and "4 more of earlier bench commands" in page
 
 
+def test_legs_a_plan_does_not_report_are_missing_not_zero(tmp_path: Path) -> None:
+    """A plan that never calls `PlanReport.add_leg`: `run` says so, and a bench stores no
+    straight-line distance (not 0 m, which summaries and paired tests would take for one)."""
+    plan_file = tmp_path / "no_legs.py"
+    source = (EXAMPLES / "fetch_two.py").read_text()
+    assert "report.add_leg(" in source
+    plan_file.write_text(source.replace("report.add_leg(", "(lambda *legs: None)("))
+    ran = run_cli("run", "v1", "--plan", "./no_legs.py:fetch_two", "--backend", "kinematic",
+                  "--json", cwd=tmp_path)
+    assert ran.returncode == 0, ran.stderr[-2000:]
+    assert json.loads(ran.stdout)["straight_line_m"] is None
+    out = tmp_path / "out"
+    done = run_cli("bench", "--plan", "./no_legs.py:fetch_two", "--setups", "v1",
+                   "--trials", "2", "--strategies", "opm,baseline", "--backend", "kinematic",
+                   "--no-plots", "--out", str(out), cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-2000:]
+    rows = _rows(out)
+    assert len(rows) == 4 and all(r["success"] == "True" for r in rows)
+    assert {r["straight_line_m"] for r in rows} == {""}
+    assert all(float(r["base_path_m"]) > 1.0 for r in rows)
+    with (out / "summary.csv").open() as handle:
+        summary = list(csv.DictReader(handle))
+    assert {s["straight_line_m_mean"] for s in summary} == {"nan"}
+    tests = json.loads((out / "tests.json").read_text())["wilcoxon"][0]
+    assert tests["straight_line_m"]["mean"] is None
+    assert tests["base_path_m"]["mean"] > 1.0  # (the other measures are compared as ever)
+
+
 def test_bench_on_dask_runs_a_plan_file(tmp_path: Path) -> None:
     pytest.importorskip("distributed")
     out = tmp_path / "out"

@@ -103,20 +103,25 @@ def paired_tests(rows: Sequence[dict[str, Any]], strategy: str, reference: str =
              for (s, t, name) in by_key if name == strategy and (s, t, reference) in by_key]
     result: dict[str, Any] = {"strategy": strategy, "reference": reference, "pairs": len(pairs)}
     for measure in MEASURES[1:]:
-        a = np.array([_float(x.get(measure)) for x, _ in pairs])
-        b = np.array([_float(y.get(measure)) for _, y in pairs])
+        # (the pairs where both have the measure: a user's plan may not report its legs)
+        measured = [(x, y) for x, y in pairs if np.isfinite(_float(x.get(measure)))
+                    and np.isfinite(_float(y.get(measure)))]
+        a = np.array([_float(x.get(measure)) for x, _ in measured])
+        b = np.array([_float(y.get(measure)) for _, y in measured])
         test: dict[str, Any] = {"mean": float(a.mean()) if len(a) else None,
                                 "reference_mean": float(b.mean()) if len(b) else None}
+        if len(measured) < len(pairs):
+            test["pairs"] = len(measured)
         if len(a) and np.any(a != b):
             res = stats.wilcoxon(a, b)
             test.update(W=float(res.statistic), p=float(res.pvalue))
         else:
             test.update(W=None, p=None, note="no pairs or no differences")
-        setups = sorted({x["setup"] for x, _ in pairs})
+        setups = sorted({x["setup"] for x, _ in measured})
         if len(setups) >= 2:
-            ma = [np.mean([_float(x.get(measure)) for x, _ in pairs if x["setup"] == s])
+            ma = [np.mean([_float(x.get(measure)) for x, _ in measured if x["setup"] == s])
                   for s in setups]
-            mb = [np.mean([_float(y.get(measure)) for _, y in pairs if y["setup"] == s])
+            mb = [np.mean([_float(y.get(measure)) for _, y in measured if y["setup"] == s])
                   for s in setups]
             if np.any(np.array(ma) != np.array(mb)):
                 res = stats.wilcoxon(ma, mb)
@@ -141,11 +146,21 @@ def order_percentiles(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
                 continue
             entry = {"setup": setup, "strategy": strategy, "orders": len(every)}
             for measure in ("base_path_m", "robot_time_s", "straight_line_m"):
-                value = statistics.mean(_float(r[measure]) for r in mine)
+                values = [_float(r[measure]) for r in mine]
                 population = np.array([_float(r[measure]) for r in every])
+                population = population[np.isfinite(population)]
+                if not len(population) or not all(map(np.isfinite, values)):
+                    entry[f"{measure}_percentile"] = None  # (not reported)
+                    continue
+                value = statistics.mean(values)
                 entry[f"{measure}_percentile"] = float((population < value).mean() * 100)
             out.append(entry)
     return out
+
+
+def percent(value: float | None) -> str:
+    """A percentile as text ("–": not measured, e.g. legs a user's plan did not report)."""
+    return "–" if value is None else f"{value:.0f} %"
 
 
 def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[str, Any]],
@@ -205,6 +220,8 @@ def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[
             if t.get("p") is None:
                 lines.append(f"- {measure}: {t.get('note', 'n/a')}")
                 continue
+            if "pairs" in t:  # (fewer: the others lack the measure)
+                measure = f"{measure} ({t['pairs']} pairs)"
             per = t.get("per_setup")
             per_text = (f"; per-setup means (n={per['n']}): W = {per['W']:.1f}, "
                         f"p = {per['p']:.3g}") if per else ""
@@ -215,9 +232,9 @@ def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[
                       "0 % = best):"]
         for e in percentiles:
             lines.append(f"- {e['setup']} {e['strategy']}: driven path "
-                         f"{e['base_path_m_percentile']:.0f} %, straight-line "
-                         f"{e['straight_line_m_percentile']:.0f} %, robot time "
-                         f"{e['robot_time_s_percentile']:.0f} % of {e['orders']} orders")
+                         f"{percent(e['base_path_m_percentile'])}, straight-line "
+                         f"{percent(e['straight_line_m_percentile'])}, robot time "
+                         f"{percent(e['robot_time_s_percentile'])} of {e['orders']} orders")
     text = "\n".join(lines) + "\n"
     (folder / "summary.md").write_text(text, encoding="utf-8")
     (folder / "tests.json").write_text(json.dumps({"wilcoxon": tests,

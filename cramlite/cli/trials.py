@@ -160,8 +160,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         if result.carry > 1:
             print(f"  carrying up to {result.carry} at once: {len(result.trips)} trips ("
                   + "; ".join(" + ".join(trip) for trip in result.trips) + ")")
-        legs = (f"{result.straight_line_m:.2f} m" if result.straight_line_m or
-                is_builtin(result.plan) else "not reported by the plan (PlanReport.add_leg)")
+        legs = (f"{result.straight_line_m:.2f} m" if result.straight_line_m is not None
+                else "not reported by the plan (PlanReport.add_leg)")
         print(f"  driven base path {result.base_path_m:.2f} m, straight-line legs {legs}")
         together = (f", {result.parallel_s:.2f} s of them at once"
                     if result.parallel_s else "")

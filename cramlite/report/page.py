@@ -12,7 +12,7 @@ from typing import Any
 from cramlite.bench.labels import base_name
 from cramlite.bench.plots import BOX_LEGEND
 from cramlite.bench.specs import FIXED_ORDER
-from cramlite.bench.summary import MEASURES
+from cramlite.bench.summary import MEASURES, percent
 from cramlite.errors import UserInputError
 from cramlite.report.folder import BenchFolder
 from cramlite.report.trials import failure_text, ok, orders, steps, trial_id
@@ -365,7 +365,7 @@ def _tests(data: PageData) -> str:
             per = t.get("per_setup")
             rows.append(
                 f"<tr><td>{e(test['strategy'])} vs {e(test['reference'])}</td>"
-                f"<td>{e(measure)}</td><td class=n>{test['pairs']}</td>"
+                f"<td>{e(measure)}</td><td class=n>{t.get('pairs', test['pairs'])}</td>"
                 f"<td class=n>{num(t.get('mean'))}</td><td class=n>"
                 f"{num(t.get('reference_mean'))}</td><td class=n>{num(t.get('W'), 1)}</td>"
                 f"<td class=n>{_p(t.get('p'))}</td><td>"
@@ -537,9 +537,9 @@ def _all_orders(data: PageData) -> str:
         for p in data.percentiles:
             parts.append(f"<tr><td>{e(p['setup'])}</td><td>{e(p['strategy'])}</td>"
                          f"<td class=n>{p['orders']}</td>"
-                         f"<td class=n>{p['base_path_m_percentile']:.0f} %</td>"
-                         f"<td class=n>{p['straight_line_m_percentile']:.0f} %</td>"
-                         f"<td class=n>{p['robot_time_s_percentile']:.0f} %</td></tr>")
+                         f"<td class=n>{percent(p['base_path_m_percentile'])}</td>"
+                         f"<td class=n>{percent(p['straight_line_m_percentile'])}</td>"
+                         f"<td class=n>{percent(p['robot_time_s_percentile'])}</td></tr>")
         parts.append("</table>")
     return "\n".join(parts)
 
