@@ -91,5 +91,6 @@ def test_the_readme_tour_runs_as_written(tmp_path: Path) -> None:
     assert "nothing penetrating" in subprocess.run(
         [sys.executable, "-m", "cramlite", "replay", "v1.jsonl", "--check"],
         capture_output=True, text=True, cwd=tmp_path).stdout
-    assert (tmp_path / "results" / "report.html").exists()
+    assert (tmp_path / "tour" / "report.html").exists()
     assert (tmp_path / "two" / "report.html").exists()
+    assert not (tmp_path / "results").exists()  # (`make run`'s folder: the tour keeps out)
