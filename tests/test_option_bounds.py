@@ -44,3 +44,18 @@ def test_the_largest_seed_is_accepted() -> None:
     from cramlite.cli.common import seed_int
 
     assert seed_int(str(2**64 - 1)) == 2**64 - 1
+
+
+@pytest.mark.parametrize(("command", "option", "expected"), CASES,
+                         ids=[c[0] for c in CASES])
+def test_the_help_gives_each_bounded_option_s_range(command: str, option: str,
+                                                    expected: str, capsys) -> None:
+    """README: "the ranges are in `--help`"."""
+    with pytest.raises(SystemExit) as exited:
+        main([command.split()[0], "--help"])
+    assert exited.value.code == 0
+    text = capsys.readouterr().out
+    start = text.index(f"  {option} ")
+    following = [text.find("\n  -", start + 1), len(text)]
+    block = " ".join(text[start:min(i for i in following if i > 0)].split())
+    assert expected in block, block

@@ -20,6 +20,7 @@ from cramlite.cli.common import (
     EXIT_BAD_INPUT,
     EXIT_BROKEN_PIPE,
     Parser,
+    show_ranges,
 )
 from cramlite.errors import UserInputError, bounded_text
 
@@ -51,7 +52,14 @@ def build_parser(argv: Sequence[str] | None = None, full: bool = False) -> argpa
             registered.add(module)
         else:
             sub.add_parser(name, help=help_text, add_help=False)
+    for command in registered_parsers(sub):
+        show_ranges(command)
     return parser
+
+
+def registered_parsers(sub: argparse._SubParsersAction) -> list[argparse.ArgumentParser]:
+    """The commands' parsers (each once: a command may have an alias)."""
+    return list({id(p): p for p in sub.choices.values()}.values())
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -131,6 +131,7 @@ def int_in_range(minimum: int, wording: str, maximum: int | None = None,
         if value is None or value < minimum or (maximum is not None and value > maximum):
             raise argparse.ArgumentTypeError(f"expected {wording}, got {text!r}")
         return value
+    parse.expected = wording  # type: ignore[attr-defined]  # (shown in --help)
     return parse
 
 
@@ -152,7 +153,22 @@ def float_in_range(minimum: float, maximum: float, wording: str,
         if not (math.isfinite(value) and low_ok and value <= maximum):
             raise argparse.ArgumentTypeError(f"expected {wording}, got {text!r}")
         return value
+    parse.expected = wording  # type: ignore[attr-defined]  # (shown in --help)
     return parse
+
+
+def show_ranges(parser: argparse.ArgumentParser) -> None:
+    """Add to each option's help what values it takes, where its type says (`int_in_range`,
+    `float_in_range`) and the help does not already."""
+    for action in parser._actions:
+        expected = getattr(action.type, "expected", None)
+        if not expected or action.help in (None, argparse.SUPPRESS):
+            continue
+        expected = expected.split(": ", 1)[-1]  # ("a seed: a whole number ...")
+        if expected in action.help:
+            continue
+        action.help = (f"{action.help[:-1]}; {expected})" if action.help.endswith(")")
+                       else f"{action.help} ({expected})")
 
 
 #: Upper bounds of numeric options: far beyond any real use, low enough that no option
