@@ -48,7 +48,8 @@ SECTIONS: list[tuple[str, list[tuple[str, str]]]] = [
     ("Failures", [
         ("cramlite.designators", n) for n in (
             "PlanFailure", "NavigationFailed", "GraspFailed", "PlacementFailed",
-            "MotionPlanningFailed", "IKFailed", "ObjectNotFound", "ObjectUnreachable")]),
+            "MotionPlanningFailed", "IKFailed", "ObjectNotFound", "ObjectUnreachable",
+            "ContainerManipulationFailed")]),
     ("Ordering strategies", [
         ("cramlite.strategies", n) for n in (
             "Strategy", "Candidate", "make_strategy", "available_strategies")]),

@@ -15,6 +15,7 @@ from cramlite.designators.actions import (
 from cramlite.designators.carrying import DeliverAction, FetchAction, Fetched
 from cramlite.designators.context import ExecutionOptions, RobotContext, simulated_robot
 from cramlite.designators.failures import (
+    ContainerManipulationFailed,
     GraspFailed,
     IKFailed,
     MotionPlanningFailed,
@@ -53,7 +54,8 @@ from cramlite.designators.perception import DetectAction
 from cramlite.designators.tasks import ActionDesignator
 
 __all__ = [
-    "ActionDesignator", "AttachMotion", "CostmapLocation", "DetachMotion", "ExecutionOptions",
+    "ActionDesignator", "AttachMotion", "ContainerManipulationFailed", "CostmapLocation",
+    "DetachMotion", "ExecutionOptions",
     "GraspFailed", "IKFailed", "MotionPlanningFailed", "MoveArmJointsMotion", "MoveGripperMotion",
     "MoveMotion", "MoveTCPMotion",
     "MoveTorsoAction",
