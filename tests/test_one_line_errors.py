@@ -48,3 +48,21 @@ def test_a_failure_says_each_thing_it_tried_once_with_how_often() -> None:
     assert str(failure) == ("cup: no base pose reaches it (tried: right arm top grasp: could "
                             "not put it down (9 times); left arm: out of reach)")
     assert len(failure.as_dict()["tried"]) == 10  # (the row keeps every attempt)
+
+
+@pytest.mark.parametrize("args, expected", [
+    (["run", "v1", "--params", "c=2"], "strategy 'baseline' takes no parameters"),
+    (["run", "v1", "--strategy", "nearest", "--params", "c=2"],
+     "strategy 'nearest' takes no parameters"),
+    (["evaluate", "table-setting", "--strategy", "baseline", "--params", "c=2"],
+     "strategy 'baseline' takes no parameters"),
+    (["run", "v1", "--strategy", "opm", "--params", "c=1.7,c=2"], "c is given twice"),
+])
+def test_parameters_a_strategy_would_ignore_are_refused(args: list[str],
+                                                        expected: str) -> None:
+    """--params for a strategy without parameters, or one given twice, is a mistake to
+    say, not to run past (the run would not be the one asked for)."""
+    result = run_cli(*args)
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2 and len(lines) == 1, result.stderr
+    assert "--params" in lines[0] and expected in lines[0], lines[0]

@@ -94,6 +94,9 @@ def parse_params(text: str | None) -> dict[str, float]:
         problem = parameter_problem(name, number)
         if problem:
             raise UserInputError(f"{name}: {problem}", field="--params")
+        if name in params:
+            raise UserInputError(f"{name} is given twice ({params[name]:g} and {number:g}); "
+                                 "expected each parameter once", field="--params")
         params[name] = number
     return params
 
@@ -108,8 +111,12 @@ def progress_bar(total: float, desc: str):
 def strategy_checked(name: str, **kwargs) -> None:
     """Refuse an unknown or unusable strategy (or parameters) as a --strategy error."""
     from cramlite.strategies import StrategyError, make_strategy
+    from cramlite.strategies.registry import strategy_class
 
     try:
+        if kwargs.get("params") and not getattr(strategy_class(name), "uses_params", True):
+            raise UserInputError(f"strategy {name!r} takes no parameters (those of --params "
+                                 "are the OPM's: e.g. --strategy opm)", field="--params")
         make_strategy(name, **kwargs)
     except StrategyError as exc:
         raise UserInputError(str(exc), field="--strategy") from None
