@@ -66,3 +66,15 @@ def test_parameters_a_strategy_would_ignore_are_refused(args: list[str],
     lines = result.stderr.strip().splitlines()
     assert result.returncode == 2 and len(lines) == 1, result.stderr
     assert "--params" in lines[0] and expected in lines[0], lines[0]
+
+
+def test_a_strategy_without_a_name_is_named_by_its_file_and_class(tmp_path: Path) -> None:
+    (tmp_path / "s.py").write_text("from cramlite import Strategy\n\n\n"
+                                   "class ReturnsNone(Strategy):\n    uses_params = False\n\n"
+                                   "    def choose(self, remaining, agent):\n"
+                                   "        return None\n")
+    result = run_cli("run", "v1", "--strategy", "./s.py:ReturnsNone", "--backend",
+                     "kinematic", cwd=tmp_path)
+    assert result.returncode == 2
+    assert f"strategy {tmp_path / 's.py'}:ReturnsNone returned None" in result.stderr, \
+        result.stderr

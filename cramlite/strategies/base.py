@@ -79,8 +79,11 @@ def strategy_label(strategy: Strategy) -> str:
 
         with contextlib.suppress(TypeError, OSError):
             where = inspect.getfile(cls)
-        return f"{cls.name!r} ({where}:{cls.__qualname__})"
-    return f"{cls.name!r} ({where}.{cls.__qualname__})"
+        place = f"{where}:{cls.__qualname__}"
+    else:
+        place = f"{where}.{cls.__qualname__}"
+    # (a class that sets no name of its own has Strategy's: its place alone names it)
+    return place if cls.name == Strategy.name else f"{cls.name!r} ({place})"
 
 
 def checked_reset(strategy: Strategy, candidates: Sequence[Candidate],
