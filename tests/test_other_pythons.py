@@ -106,7 +106,7 @@ def test_the_wheel_installs_on_python_313_with_mujoco_without_pybullet_and_runs(
         assert result["success"] and result["backend"] == "mujoco", result
     opm = _trial(cramlite, tmp_path, "v1", "--strategy", "opm")
     assert " ".join(opm["order"]) == "bowl breakfast-cereal cup spoon milk"  # Table 4.3
-    # (the check and the picture of the shorter trace: c1's 4 300 states are checked on
+    # (the check and the picture of the shorter trace: c1's 3 500 states are checked on
     # 3.11 by test_storage, and here would cost half a minute more)
     checked = _run([cramlite, "replay", "v1.jsonl", "--check"], cwd=tmp_path)
     assert "nothing penetrating" in checked.stdout, checked.stdout
