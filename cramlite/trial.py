@@ -235,9 +235,10 @@ def _legs(report: PlanReport, plan: str) -> float | None:
     """The straight-line legs a plan reported: a built-in plan that fetched nothing drove
     none (0 m); a user's plan that never reported any (`PlanReport.add_leg`): None, not a
     distance of 0 that summaries and tests would take for one."""
-    if report.straight_line_m is None:
+    legs = report.legs_m()
+    if legs is None:
         return 0.0 if is_builtin(plan) else None
-    return round(float(report.straight_line_m), 6)
+    return round(legs, 6)
 
 
 def _as_report(value: Any, plan: str) -> PlanReport:

@@ -176,7 +176,32 @@ def test_legs_a_plan_does_not_report_are_missing_not_zero(tmp_path: Path) -> Non
     assert {s["straight_line_m_mean"] for s in summary} == {"nan"}
     tests = json.loads((out / "tests.json").read_text())["wilcoxon"][0]
     assert tests["straight_line_m"]["mean"] is None
+    assert tests["straight_line_m"]["note"].startswith("not reported")
+    assert "did not report its legs" in (out / "summary.md").read_text()
     assert tests["base_path_m"]["mean"] > 1.0  # (the other measures are compared as ever)
+    # a folder written before: such a plan's legs as 0 m, read as not reported (a resume
+    # and the report), a built-in plan's as they are
+    from cramlite.bench.store import TrialStore
+    from cramlite.report.folder import read_folder
+
+    trials = out / "trials.csv"
+    with trials.open(newline="") as handle:
+        rows = list(csv.reader(handle))
+    column = rows[0].index("straight_line_m")
+    for row in rows[1:]:
+        row[column] = "0.0"
+    with trials.open("w", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    assert {r["straight_line_m"] for r in TrialStore(out).rows()} == {""}
+    assert {r["straight_line_m"] for r in read_folder(out).rows} == {""}
+    # adding to the field directly (as the API allowed before `add_leg`) reports legs
+    leg = "report.add_leg(robot_position(ctx)[:2], chosen.position[:2], target.xyz[:2])"
+    assert leg in source
+    plan_file.write_text(source.replace(leg, "report.straight_line_m += 1.25"))
+    ran = run_cli("run", "v1", "--plan", "./no_legs.py:fetch_two", "--backend", "kinematic",
+                  "--json", cwd=tmp_path)
+    assert ran.returncode == 0, ran.stderr[-2000:]
+    assert json.loads(ran.stdout)["straight_line_m"] == 2.5  # (two items)
 
 
 def test_bench_on_dask_runs_a_plan_file(tmp_path: Path) -> None:

@@ -117,3 +117,22 @@ def _task_tree_problem(nodes: Any, depth: int = 0) -> str | None:
 
 
 __all__ = ["CellProblem", "JSON_COLUMNS", "parsed_json_cells", "row_problem"]
+
+
+def legs_not_reported(row: dict[str, Any]) -> dict[str, Any]:
+    """The row with a user's plan's straight-line legs of exactly 0 m read as not reported
+    (empty): before 2026-12-04 a plan that never called `PlanReport.add_leg` was written as
+    0, which summaries and paired tests took for a distance; now it is written empty. (A
+    plan that fetched anything has legs longer than 0; the built-in plans always report
+    theirs.)"""
+    from cramlite.plan_names import PLAN_NAMES
+
+    value = row.get("straight_line_m")
+    if row.get("plan", "set-table") not in PLAN_NAMES and value not in (None, ""):
+        try:
+            if float(value) == 0.0:
+                row["straight_line_m"] = ""
+        except (TypeError, ValueError):
+            pass
+    return row
+

@@ -28,7 +28,12 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from cramlite.bench.row_check import CellProblem, parsed_json_cells, row_problem
+from cramlite.bench.row_check import (
+    CellProblem,
+    legs_not_reported,
+    parsed_json_cells,
+    row_problem,
+)
 from cramlite.errors import UserInputError
 from cramlite.file_limits import checked_file
 from cramlite.safe_json import parse_json
@@ -107,7 +112,7 @@ class TrialStore:
                 if key in seen:
                     continue  # (the same trial twice: the first record stands)
                 seen.add(key)
-                rows.append(row)
+                rows.append(legs_not_reported(row))
         except csv.Error as exc:  # e.g. a cell over the csv module's 128 KiB
             raise UserInputError(f"not a CSV record ({exc}); expected the rows `cramlite "
                                  "bench` writes", source=str(self.path),

@@ -115,6 +115,8 @@ def paired_tests(rows: Sequence[dict[str, Any]], strategy: str, reference: str =
         if len(a) and np.any(a != b):
             res = stats.wilcoxon(a, b)
             test.update(W=float(res.statistic), p=float(res.pvalue))
+        elif pairs and not measured:
+            test.update(W=None, p=None, note="not reported (a user's plan's legs)")
         else:
             test.update(W=None, p=None, note="no pairs or no differences")
         setups = sorted({x["setup"] for x, _ in measured})
@@ -146,10 +148,11 @@ def order_percentiles(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
                 continue
             entry = {"setup": setup, "strategy": strategy, "orders": len(every)}
             for measure in ("base_path_m", "robot_time_s", "straight_line_m"):
-                values = [_float(r[measure]) for r in mine]
+                # (of the trials that have the measure, as `summarise` takes them)
+                values = [v for v in (_float(r[measure]) for r in mine) if np.isfinite(v)]
                 population = np.array([_float(r[measure]) for r in every])
                 population = population[np.isfinite(population)]
-                if not len(population) or not all(map(np.isfinite, values)):
+                if not len(population) or not values:
                     entry[f"{measure}_percentile"] = None  # (not reported)
                     continue
                 value = statistics.mean(values)
@@ -204,7 +207,8 @@ def write_summary(folder: Path, summary: list[dict[str, Any]], tests: list[dict[
                  "limits), deterministic for a seed; "
                  "wall: the host's time to plan and execute it. open/close: the part of the "
                  "robot time spent opening and closing drawers and doors. Times and lengths "
-                 "are of the successful trials (–: none succeeded).")
+                 "are of the successful trials (–: none succeeded, or, straight-line, a user's "
+                 "plan did not report its legs).")
     from cramlite.bench.agreement import agreement_markdown, injection_markdown
 
     lines += agreement_markdown(agreement)

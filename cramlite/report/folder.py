@@ -17,7 +17,13 @@ from pathlib import Path
 from typing import Any
 
 from cramlite.bench.labels import by_backend, several_backends, several_carries
-from cramlite.bench.row_check import JSON_COLUMNS, CellProblem, parsed_json_cells, row_problem
+from cramlite.bench.row_check import (
+    JSON_COLUMNS,
+    CellProblem,
+    legs_not_reported,
+    parsed_json_cells,
+    row_problem,
+)
 from cramlite.bench.specs import FIXED_ORDER, trace_file
 from cramlite.bench.store import KEY_COLUMNS, key_digest
 from cramlite.errors import UserInputError
@@ -149,7 +155,7 @@ def _rows(path: Path) -> list[dict[str, Any]]:
             row = _checked_row(row, header, src, number)
             if row is not None and _key(row) not in seen:  # (a trial twice: the first)
                 seen.add(_key(row))
-                rows.append(row)
+                rows.append(legs_not_reported(row))
     except csv.Error as exc:  # e.g. a cell over the csv module's 128 KiB
         raise UserInputError(f"not a CSV record ({exc}); {NOT_A_BENCH}", source=src,
                              field=f"line {reader.line_num + 1}") from None
