@@ -19,6 +19,7 @@ from cramlite.plans.set_table import item_candidate, robot_position
 
 from cramlite import (
     CloseAction,
+    Code,
     DetectAction,
     LookAtAction,
     MoveTorsoAction,
@@ -30,6 +31,7 @@ from cramlite import (
     Setup,
     Strategy,
     TransportAction,
+    TryInOrder,
 )
 
 #: How many items it fetches.
@@ -55,7 +57,9 @@ def fetch_two(ctx: RobotContext, setup: Setup, strategy: Strategy) -> PlanReport
         # (the straight legs robot -> item -> target, as the built-in plans report them)
         report.add_leg(robot_position(ctx)[:2], chosen.position[:2], target.xyz[:2])
         try:
-            LookAtAction(chosen.name).perform(ctx)  # (the head turns to it first)
+            # the head turns to it first; an item behind the head's reach (it pans
+            # 172 degrees each way) is fetched without the look
+            TryInOrder([LookAtAction(chosen.name), Code(lambda ctx: None)]).perform(ctx)
             TransportAction(chosen.name, target=target.xyz, target_yaw=target.yaw).perform(ctx)
         except PlanFailure as failure:  # recorded; the plan goes on with the next item
             report.failures.append(failure)

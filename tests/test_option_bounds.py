@@ -59,3 +59,18 @@ def test_the_help_gives_each_bounded_option_s_range(command: str, option: str,
     following = [text.find("\n  -", start + 1), len(text)]
     block = " ".join(text[start:min(i for i in following if i > 0)].split())
     assert expected in block, block
+
+
+def test_a_simulated_temperature_is_bounded_and_an_image_side_s_range_is_in_help(
+        capsys) -> None:
+    with pytest.raises(SystemExit) as exited:
+        main(["simulate", "--temperature", "nan"])
+    assert exited.value.code == 2
+    assert "expected a temperature from 0 to 1e6" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["replay", "--help"])
+    assert "from 16 to 4096" in " ".join(capsys.readouterr().out.split())
+    with pytest.raises(SystemExit):
+        main(["show", "--help"])
+    shown = capsys.readouterr().out
+    assert "1-4096" in shown and "[1, 4096]" not in shown  # (said once, its own way)

@@ -34,9 +34,14 @@ VERSIONS = {"3.10": ("pybullet", True, "mujoco"),
 def find_python(version: str) -> str | None:
     """An interpreter of this version (e.g. "3.13"), or None."""
     env = f"CRAMLITE_PYTHON{version.replace('.', '')}"
+    def newest_first(path: str) -> tuple[int, ...]:
+        patch = path.split("/versions/")[-1].split("/")[0].split(".")[2:3]
+        return (-int(patch[0]) if patch and patch[0].isdigit() else 0,)
+
     candidates = [os.environ.get(env), shutil.which(f"python{version}"),
                   *sorted(glob.glob(os.path.expanduser(
-                      f"~/.pyenv/versions/{version}.*/bin/python{version}")))]
+                      f"~/.pyenv/versions/{version}.*/bin/python{version}")),
+                      key=newest_first)]
     for candidate in candidates:
         if not candidate:
             continue

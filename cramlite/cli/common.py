@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -172,9 +173,11 @@ def show_ranges(parser: argparse.ArgumentParser) -> None:
         if not expected or action.help in (None, argparse.SUPPRESS):
             continue
         expected = expected.split(": ", 1)[-1]  # ("a seed: a whole number ...")
-        if expected in action.help:
+        # (a help that gives the bounds its own way, "1-4096", "1 or 2", keeps its words)
+        bounds = re.findall(r"\d+(?:\.\d+)?", expected)
+        if all(re.search(rf"(?<![\d.]){re.escape(b)}(?![\d.])", action.help) for b in bounds):
             continue
-        action.help = (f"{action.help[:-1]}; {expected})" if action.help.endswith(")")
+        action.help = (f"{action.help}; {expected}" if action.help.endswith(")")
                        else f"{action.help} ({expected})")
 
 

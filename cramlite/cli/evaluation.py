@@ -228,7 +228,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 #: A likelihood's softmax temperature (0 would make every other choice impossible; far
 #: below 1e-6 a cost over it overflows).
-temperature_float = float_in_range(1e-6, 1e6, "a temperature from 1e-06 to 1e6")
+temperature_float = float_in_range(1e-6, 1e6, "a temperature from 1e-6 to 1e6")
+#: A simulation's softmax temperature (0: always the lowest cost).
+simulate_temperature = float_in_range(0.0, 1e6, "a temperature from 0 to 1e6")
 
 
 def _add_data_arguments(p: argparse.ArgumentParser, metrics: tuple[str, ...]) -> None:
@@ -302,7 +304,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     sim.add_argument("--dims", default="xy", choices=DIM_NAMES, help="projection")
     sim.add_argument("--form", default="power", choices=("power", "additive", "product"),
                      help="functional form (Eq. 3.1-3.3)")
-    sim.add_argument("--temperature", type=float, default=DEFAULT_TEMPERATURE,
+    sim.add_argument("--temperature", type=simulate_temperature, default=DEFAULT_TEMPERATURE,
                      help="softmax over costs: P(item) ~ exp(-cost / T); 0 takes the "
                           f"lowest cost (default {DEFAULT_TEMPERATURE})")
     sim.add_argument("--episodes", type=episodes_int,

@@ -37,9 +37,11 @@ def image_side(text: str) -> int:
     except ValueError:
         value = 0
     if not 16 <= value <= MAX_SIDE_PX:
-        raise argparse.ArgumentTypeError(f"expected a whole number of pixels from 16 to "
-                                         f"{MAX_SIDE_PX}, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected {image_side.expected}, got {text!r}")
     return value
+
+
+image_side.expected = f"a whole number of pixels from 16 to {MAX_SIDE_PX}"  # (in --help)
 
 
 def cmd_replay(args: argparse.Namespace) -> int:

@@ -68,9 +68,11 @@ def correct_probabilities(strategy: Strategy, episode: Episode,
 def expected_ape(strategy: Strategy, episode: Episode, protocol: str = "heldout") -> float:
     """Exact expectation of the APE over uniform tie-breaks."""
     if not exact_ties(strategy):
+        from cramlite.strategies.base import strategy_label
+
         raise ValueError(f"expected-ape needs a strategy whose ties are known; "
-                         f"{strategy.name!r} remembers its own random choices: use the "
-                         "sampled 'ape' metric")
+                         f"{strategy_label(strategy)} remembers its own random choices: use "
+                         "the sampled 'ape' metric")
     return float(sum(1.0 - p for p in correct_probabilities(strategy, episode, protocol)))
 
 
