@@ -83,6 +83,8 @@ def _item(i: int, **changes):
     (_bad(params={"strong": 0.2}), "params.strong"),
     (_bad(params={"mid_k": "x"}), "params.mid_k"),
     (_bad(params=[0.2]), "params"),
+    (_bad(strategy="baseline", params={"c": 2.0}), "params"),  # (it would ignore them)
+    (_bad(strategy="nearest", params={"mid_k": 0.3}), "params"),
     (_bad(dims="xyzw"), "dims"),
     (_bad(form="exp"), "form"),
     (_bad(seed=-1), "seed"),

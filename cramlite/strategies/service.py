@@ -37,7 +37,7 @@ from cramlite.strategies.base import (
 )
 from cramlite.strategies.candidates import CATEGORIES, Candidate, OPMParams
 from cramlite.strategies.cost import DIMS, FORMS
-from cramlite.strategies.registry import make_strategy
+from cramlite.strategies.registry import make_strategy, strategy_class
 
 REQUEST_KEYS = {"robot", "items", "strategy", "params", "dims", "form", "seed", "then_at",
                 "weights", "full_order", "id", "capacity"}
@@ -240,6 +240,12 @@ def answer(request: Any, default_strategy: str = "opm") -> dict[str, Any]:
 
     def made() -> Any:
         try:
+            # (a request that names a strategy and gives it parameters it would ignore; one
+            # that names none gets the server's, whatever parameters its client sends)
+            if req["params"] and req["strategy"] and not getattr(strategy_class(
+                    name, registered_only=name != default_strategy), "uses_params", True):
+                raise _fail("params", f"strategy {name!r} takes no parameters (these are the "
+                                      "OPM's: e.g. \"strategy\": \"opm\")")
             return make_strategy(name, registered_only=name != default_strategy,
                                  params=req["params"], dims=req["dims"], form=req["form"],
                                  axis_weights=req["weights"], rng=req["seed"])
