@@ -8,8 +8,8 @@ commands.
 - 3.10: pybullet is installed and the default; the extra gives MuJoCo 3.x (mujoco 4 needs
   3.11), whose backend runs a trial that `replay --check` finds clean.
 
-Each version uses a python from $CRAMLITE_PYTHON3XX (e.g. CRAMLITE_PYTHON310), from PATH
-or from pyenv; it is skipped, saying so, where there is none.
+Each version uses the python $CRAMLITE_PYTHON3XX names (e.g. CRAMLITE_PYTHON310; only it,
+if set), else one from PATH or pyenv; it is skipped, saying why, where there is none.
 """
 
 from __future__ import annotations
@@ -31,32 +31,42 @@ VERSIONS = {"3.10": ("pybullet", True, "mujoco"),
             "3.13": ("mujoco", False, "mujoco-core")}
 
 
-def find_python(version: str) -> str | None:
-    """An interpreter of this version (e.g. "3.13"), or None."""
+def is_python(candidate: str, version: str) -> bool:
+    """Whether `candidate` runs and is a Python of this version (e.g. "3.13")."""
+    try:
+        done = subprocess.run([candidate, "-c", "import sys; print(sys.version_info[:2])"],
+                              capture_output=True, text=True, timeout=60)
+    except OSError:
+        return False
+    return done.returncode == 0 and done.stdout.strip() == str(
+        tuple(map(int, version.split("."))))
+
+
+def find_python(version: str) -> tuple[str | None, str]:
+    """An interpreter of this version (e.g. "3.13") and "", or None and why: $CRAMLITE_
+    PYTHON3XX if set (only it), else python3.XX on PATH, else the newest under pyenv."""
     env = f"CRAMLITE_PYTHON{version.replace('.', '')}"
+    given = os.environ.get(env)
+    if given:
+        return (given, "") if is_python(given, version) else (
+            None, f"${env} is {given!r}, which is not a Python {version} that runs")
+
     def newest_first(path: str) -> tuple[int, ...]:
         patch = path.split("/versions/")[-1].split("/")[0].split(".")[2:3]
         return (-int(patch[0]) if patch and patch[0].isdigit() else 0,)
 
-    candidates = [os.environ.get(env), shutil.which(f"python{version}"),
+    candidates = [shutil.which(f"python{version}"),
                   *sorted(glob.glob(os.path.expanduser(
                       f"~/.pyenv/versions/{version}.*/bin/python{version}")),
                       key=newest_first)]
     for candidate in candidates:
-        if not candidate:
-            continue
-        try:
-            done = subprocess.run([candidate, "-c", "import sys; print(sys.version_info[:2])"],
-                                  capture_output=True, text=True, timeout=60)
-        except OSError:
-            continue
-        if done.returncode == 0 and done.stdout.strip() == str(tuple(map(int,
-                                                                        version.split(".")))):
-            return candidate
-    return None
+        if candidate and is_python(candidate, version):
+            return candidate, ""
+    return None, (f"no Python {version} here (looked for ${env}, python{version} on PATH "
+                  f"and ~/.pyenv/versions/{version}.*)")
 
 
-PYTHONS = {version: find_python(version) for version in VERSIONS}
+FOUND = {version: find_python(version) for version in VERSIONS}
 
 
 def _run(args: list[str], cwd: Path, timeout: float = 600) -> subprocess.CompletedProcess:
@@ -68,11 +78,9 @@ def _run(args: list[str], cwd: Path, timeout: float = 600) -> subprocess.Complet
 def _venv(version: str, work: Path) -> Path:
     """A venv of this Python with the cramlite wheel and its mujoco extra, from wheels
     only (the wheel itself built by that Python)."""
-    python = PYTHONS[version]
+    python, why = FOUND[version]
     if python is None:
-        pytest.skip(f"no Python {version} here (looked for $CRAMLITE_PYTHON"
-                    f"{version.replace('.', '')}, python{version} on PATH and "
-                    f"~/.pyenv/versions/{version}.*): the {version} install is not tested")
+        pytest.skip(f"{why}: the {version} install is not tested")
     # (from a copy of the tree: setuptools writes build/ and *.egg-info into the tree it
     # builds, and two versions' builds at once, on two test workers, would collide there)
     source = work / "source"
