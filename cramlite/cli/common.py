@@ -112,10 +112,10 @@ def progress_bar(total: float, desc: str):
 def strategy_checked(name: str, **kwargs) -> None:
     """Refuse an unknown or unusable strategy (or parameters) as a --strategy error."""
     from cramlite.strategies import StrategyError, make_strategy
-    from cramlite.strategies.registry import strategy_class
+    from cramlite.strategies.registry import ignores_params
 
     try:
-        if kwargs.get("params") and not getattr(strategy_class(name), "uses_params", True):
+        if kwargs.get("params") and ignores_params(name):
             raise UserInputError(f"strategy {name!r} takes no parameters (those of --params "
                                  "are the OPM's: e.g. --strategy opm)", field="--params")
         make_strategy(name, **kwargs)

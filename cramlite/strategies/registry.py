@@ -103,6 +103,14 @@ def strategy_class(name: str, *, registered_only: bool = False) -> type[Strategy
     return cls
 
 
+def ignores_params(name: str, *, registered_only: bool = False) -> bool:
+    """Whether the strategy takes no OPM parameters (its class says `uses_params = False`):
+    parameters given to it would be ignored, which the command line and the ordering
+    service refuse rather than run past."""
+    return not getattr(strategy_class(name, registered_only=registered_only), "uses_params",
+                       True)
+
+
 def make_strategy(name: str, *, registered_only: bool = False, **kwargs: Any) -> Strategy:
     """A fresh strategy instance (one per episode or trial). A plugin whose constructor
     fails is reported as a StrategyError naming it."""

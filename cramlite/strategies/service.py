@@ -37,7 +37,7 @@ from cramlite.strategies.base import (
 )
 from cramlite.strategies.candidates import CATEGORIES, Candidate, OPMParams
 from cramlite.strategies.cost import DIMS, FORMS
-from cramlite.strategies.registry import make_strategy, strategy_class
+from cramlite.strategies.registry import ignores_params, make_strategy
 
 REQUEST_KEYS = {"robot", "items", "strategy", "params", "dims", "form", "seed", "then_at",
                 "weights", "full_order", "id", "capacity"}
@@ -242,8 +242,8 @@ def answer(request: Any, default_strategy: str = "opm") -> dict[str, Any]:
         try:
             # (a request that names a strategy and gives it parameters it would ignore; one
             # that names none gets the server's, whatever parameters its client sends)
-            if req["params"] and req["strategy"] and not getattr(strategy_class(
-                    name, registered_only=name != default_strategy), "uses_params", True):
+            if req["params"] and req["strategy"] and ignores_params(
+                    name, registered_only=name != default_strategy):
                 raise _fail("params", f"strategy {name!r} takes no parameters (these are the "
                                       "OPM's: e.g. \"strategy\": \"opm\")")
             return make_strategy(name, registered_only=name != default_strategy,
