@@ -13,6 +13,7 @@ from cramlite.cli.common import (
     chosen_backend,
     command_help,
     float_in_range,
+    int_in_range,
     writable_file,
 )
 from cramlite.errors import UserInputError
@@ -31,17 +32,9 @@ def positive_float(text: str) -> float:
     return value
 
 
-def image_side(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if not 16 <= value <= MAX_SIDE_PX:
-        raise argparse.ArgumentTypeError(f"expected {image_side.expected}, got {text!r}")
-    return value
-
-
-image_side.expected = f"a whole number of pixels from 16 to {MAX_SIDE_PX}"  # (in --help)
+#: A GIF's width or height in pixels.
+image_side = int_in_range(16, f"a whole number of pixels from 16 to {MAX_SIDE_PX}",
+                          MAX_SIDE_PX)
 
 
 def cmd_replay(args: argparse.Namespace) -> int:
