@@ -116,9 +116,6 @@ def _task_tree_problem(nodes: Any, depth: int = 0) -> str | None:
     return None
 
 
-__all__ = ["CellProblem", "JSON_COLUMNS", "parsed_json_cells", "row_problem"]
-
-
 def legs_not_reported(row: dict[str, Any]) -> dict[str, Any]:
     """The row with a user's plan's straight-line legs of exactly 0 m read as not reported
     (empty): before 2026-12-04 a plan that never called `PlanReport.add_leg` was written as
@@ -127,12 +124,12 @@ def legs_not_reported(row: dict[str, Any]) -> dict[str, Any]:
     theirs.)"""
     from cramlite.plan_names import PLAN_NAMES
 
+    # (read after `row_problem`: the cell is empty or a finite number)
     value = row.get("straight_line_m")
-    if row.get("plan", "set-table") not in PLAN_NAMES and value not in (None, ""):
-        try:
-            if float(value) == 0.0:
-                row["straight_line_m"] = ""
-        except (TypeError, ValueError):
-            pass
+    if row.get("plan", "set-table") not in PLAN_NAMES and value and float(value) == 0.0:
+        row["straight_line_m"] = ""
     return row
 
+
+__all__ = ["CellProblem", "JSON_COLUMNS", "legs_not_reported", "parsed_json_cells",
+           "row_problem"]
