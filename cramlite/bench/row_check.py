@@ -10,6 +10,8 @@ import re
 from collections.abc import Mapping
 from typing import Any
 
+from cramlite.plan_names import PLAN_NAMES
+
 #: Columns holding a whole number (an index or a seed).
 WHOLE_COLUMNS = {"trial": 9, "seed": 20, "batch_seed": 20}
 #: Columns holding a measurement: empty (a failed trial) or a finite number >= 0.
@@ -122,8 +124,6 @@ def legs_not_reported(row: dict[str, Any]) -> dict[str, Any]:
     0, which summaries and paired tests took for a distance; now it is written empty. (A
     plan that fetched anything has legs longer than 0; the built-in plans always report
     theirs.)"""
-    from cramlite.plan_names import PLAN_NAMES
-
     # (read after `row_problem`: the cell is empty or a finite number)
     value = row.get("straight_line_m")
     if row.get("plan", "set-table") not in PLAN_NAMES and value and float(value) == 0.0:
