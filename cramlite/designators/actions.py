@@ -14,7 +14,7 @@ from __future__ import annotations
 import contextlib
 import math
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
@@ -312,8 +312,9 @@ class PlaceAction(ActionDesignator):
 @dataclass
 class TransportAction(ActionDesignator):
     """Fetch an object and put it at a target (or on a surface): navigate, pick up,
-    navigate, place; each step falls through to the next candidate on failure. Returns
-    where the object came to rest."""
+    navigate, place; each step falls through to the next candidate on failure. If the
+    hand that took it cannot put it down, it is put back and the other hand (of `arms`)
+    carries it. Returns where the object came to rest."""
 
     object: ObjectDesignator | ObjectDesignatorDescription | str  #: what to carry
     target: Vec3 | None = None  #: where its bottom centre goes (or give `surface`)
@@ -378,9 +379,26 @@ class TransportAction(ActionDesignator):
                     picked_from, planned = self._fetch(ctx, obj, target, None, local)
                 target = _at(ctx, destination, local)
             self._deliver(ctx, obj, planned, target)
-        except PlanFailure:
-            self._put_back(ctx, obj, origin, picked_from)
-            raise
+        except PlanFailure as failure:
+            put_down = self._put_back(ctx, obj, origin, picked_from)
+            others = [a for a in (self.arms or ARMS)
+                      if a != picked_from.arm and a not in ctx.holding]
+            if not put_down or not others:  # (not where it could be taken from again)
+                raise
+            # the goal was reachable with this hand, but not the way there (e.g. into a
+            # cupboard past its side wall): the other hand takes it from where it is now
+            ctx.note(f"could not put {obj.name} down with the {picked_from.arm} arm "
+                     f"({failure.kind}); taking it with the {' or '.join(others)} arm")
+            ParkArmsAction().perform(ctx)
+            try:
+                at_rest = replace(self, object=obj, arms=others).perform(ctx)
+            except PlanFailure as second:
+                raise type(second)(second.reason, obj=obj.name, tried=[
+                    f"{picked_from.arm} arm: {failure.kind}: {failure.reason}",
+                    *second.tried]) from second
+            for container in to_close:
+                _closed_now(ctx, CloseAction, container)
+            return at_rest
         if destination is not None and not ctx.options.keep_containers_open:
             to_close.append(destination)  # the item is in: close it
         for container in to_close:  # (what cannot be closed now, the plan closes at its end)
@@ -524,23 +542,43 @@ class TransportAction(ActionDesignator):
         return self.target_yaw if target is not None else None
 
     def _put_back(self, ctx: RobotContext, obj: ObjectDesignator, origin: Vec3,
-                  picked_from: ReachablePose) -> None:
+                  picked_from: ReachablePose) -> bool:
         """After a failed delivery nothing stays in hand: put the object back where it was
-        taken from (from the same base pose), or, if even that fails, let go of it."""
+        taken from (from the same base pose, the pick's own checked configurations in
+        reverse), else on the same surface, as near to it as it can, or, if even that
+        fails, let go of it. True if it was put down."""
         arm = next((a for a, h in ctx.holding.items() if h.obj == obj.name), None)
         if arm is None:
-            return
+            return False
         try:
-            NavigateAction(picked_from.base).perform(ctx)
-            PlaceAction(obj, origin, yaw=picked_from.item_yaw).perform(ctx)
-            ctx.note(f"put {obj.name} back at ({origin[0]:.2f}, {origin[1]:.2f})")
+            try:
+                NavigateAction(picked_from.base).perform(ctx)
+                # (a new IK solution for the same spot may be another elbow, one that
+                # touches the table: the pick's own solution did not)
+                undo = replace(picked_from, pre_joints=picked_from.post_joints,
+                               post_joints=picked_from.pre_joints,
+                               relative=ctx.holding[arm].relative)
+                PlaceAction(obj, origin, reach=undo).perform(ctx)
+            except PlanFailure:
+                surface = ctx.scene.surface_under(*origin, RESTING_HEIGHT_TOLERANCE_M)
+                if obj.name not in held(ctx) or surface is None:
+                    raise
+                ParkArmsAction(arm).perform(ctx)
+                beside = TransportAction(obj, surface=surface.name, preferred=origin,
+                                         arms=[arm])
+                beside._deliver(ctx, obj)
+            (x, y, _), _ = obj.pose(ctx)
+            ctx.note(f"put {obj.name} back at ({x:.2f}, {y:.2f})")
+            return True
         except PlanFailure:
             if arm in ctx.holding:
                 DetachMotion(arm, obj.name).perform(ctx)
                 del ctx.holding[arm]
                 ctx.settle([obj.name])
                 ctx.note(f"let go of {obj.name}")
-        ctx.footprint_stale = True
+            return False
+        finally:
+            ctx.footprint_stale = True
 
 
 def _closed_now(ctx: RobotContext, close, container) -> bool:
