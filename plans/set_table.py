@@ -19,8 +19,9 @@ from cramlite.designators import (
     RobotContext,
     TransportAction,
 )
+from cramlite.designators.actions import RESTING_HEIGHT_TOLERANCE_M
 from cramlite.designators.carrying import DeliverAction, FetchAction, Fetched
-from cramlite.designators.locations import IDEAL_STANDOFF_M
+from cramlite.designators.locations import IDEAL_STANDOFF_M, held
 from cramlite.designators.storage import CloseAction, container_at, container_of, is_open
 from cramlite.errors import UserInputError
 from cramlite.motion.ik import ARMS
@@ -69,7 +70,9 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
     TransportAction arguments that say where it goes (`target` or `surface`). With the
     plan option `carry` 2 (`--carry 2`) the strategy is asked for a batch, one item per
     hand (`choose_batch`), fetched one after the other and then delivered in that order;
-    an item that cannot share a trip (see `shares_a_trip`) is carried alone."""
+    an item that cannot share a trip (see `shares_a_trip`) is carried alone. An item whose
+    transport failed where it stands is tried once more when the others are done (see
+    `can_try_again`); the order reports the strategy's choices, once each."""
     remaining = [n for n in setup.baseline_order if n in goals]
     carry = carry_option(ctx)
     try:
@@ -90,6 +93,7 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
     checked_reset(strategy, [item_candidate(ctx, setup, n, then_at(n)) for n in remaining],
                   robot_position(ctx))
     alone: set[str] = set()  # (a second fetch failed with one hand full: alone next time)
+    again: list[str] = []  # (failed once where it stands: tried again when the rest is done)
     while remaining:
         candidates = [item_candidate(ctx, setup, n, then_at(n)) for n in remaining]
         here = robot_position(ctx)
@@ -112,8 +116,12 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
                 TransportAction(ObjectDesignatorDescription(names=names),
                                 **goals[names[0]]).perform(ctx)
             except PlanFailure as failure:
-                ctx.note(f"failed: {failure}")
-                report.failures.append(failure)
+                if can_try_again(ctx, names[0]):
+                    ctx.note(f"failed: {failure}; trying {names[0]} again at the end")
+                    again.append(names[0])
+                else:
+                    ctx.note(f"failed: {failure}")
+                    report.failures.append(failure)
         else:
             back = _carry_together(ctx, names, goals, report)
             for name in back:  # (not fetched: asked about again, carried alone)
@@ -126,6 +134,19 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
         report.add_trip(here[:2], [c.position[:2] for c in batch if c.name in report.order],
                         [ctx.scene.object_pose(c.name)[0][:2] for c in batch
                          if c.name in report.order])
+    for name in again:  # the others gone, what was in the way of it may be too
+        here = robot_position(ctx)
+        position = ctx.scene.object_pose(name)[0][:2]
+        try:
+            TransportAction(ObjectDesignatorDescription(names=[name]),
+                            **goals[name]).perform(ctx)
+            ctx.note(f"{name}: done at the second try")
+        except PlanFailure as failure:
+            ctx.note(f"failed again: {failure}")
+            report.failures.append(failure)
+            continue
+        report.trips.append([name])
+        report.add_trip(here[:2], [position], [ctx.scene.object_pose(name)[0][:2]])
     for step in [*(CloseAction(name) for name in list(ctx.opened)), ParkArmsAction()]:
         try:  # whatever it opened is closed again, and the arms are tucked
             step.perform(ctx)
@@ -133,6 +154,17 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
             ctx.note(f"failed: {failure}")
             report.failures.append(failure)
     return report
+
+
+def can_try_again(ctx: RobotContext, name: str) -> bool:
+    """After a failed transport, may the item be tried again later? If it is out of the
+    hand and stands on something (a surface, or in a drawer or cupboard): where it was, or
+    put back. (A failure of its own, with nothing else moved, often has another item in
+    the way of every arm that could take it.)"""
+    if name in held(ctx):
+        return False
+    point, _ = ctx.scene.object_pose(name)
+    return ctx.scene.support_under(point, RESTING_HEIGHT_TOLERANCE_M) is not None
 
 
 def carry_option(ctx: RobotContext) -> int:

@@ -122,3 +122,28 @@ def test_the_arms_a_transport_is_given_are_the_only_ones_it_uses(refused: list[s
                             arms=["left"]).perform(ctx)
     assert refused == ["left"]
 
+
+def test_an_item_that_failed_where_it_stands_is_tried_again_when_the_rest_is_done() -> None:
+    """c1, clearing up, opm, seed 4: the cup on the island is the third item; the right
+    hand could take it but not put it into the cupboard, and the cereal and milk beside
+    it are in the way of the left. Tried again last, with them gone, the left hand takes
+    it (before, the trial failed on it)."""
+    with TrialRunner("c1", backend="kinematic") as runner:
+        result = runner.run("opm", plan="clear-table", seed=4)
+    assert result.success, result.failures
+    assert "trying cup again at the end" in "\n".join(result.log), result.log
+    assert "cup: done at the second try" in result.log, result.log
+    assert result.order.count("cup") == 1  # the strategy's choices, once each
+    assert result.order.index("cup") < result.order.index("milk")  # (asked third)
+    assert [trip for trip in result.trips if trip == ["cup"]] == [["cup"], ["cup"]]
+
+
+def test_an_item_out_of_reach_is_tried_twice_and_reported_once() -> None:
+    with TrialRunner("unreachable", backend="kinematic") as runner:
+        result = runner.run("opm", seed=0)
+    assert not result.success
+    assert [f["item"] for f in result.failures] == ["milk"], result.failures
+    assert result.failures[0]["type"] == "ObjectUnreachable"
+    assert result.order.count("milk") == 1
+    log = "\n".join(result.log)
+    assert "trying milk again at the end" in log and "failed again: milk" in log, log
