@@ -159,3 +159,21 @@ def test_a_header_cannot_widen_the_robots_limits(trace) -> None:
     assert any("accel_m_s2 1e+308 beyond the PR2's 1" in c for c in claims)
     assert any("torso_lift_joint [0, 10] wider than the URDF's" in c for c in claims)
     assert not [f for f in physics_findings(trace) if f.kind == "header"]
+
+
+def test_an_item_left_in_the_air_is_found_with_its_height(trace) -> None:
+    """The cup put at its target, but 10 cm above the island: nothing under it (as the
+    kinematic backend would leave an item let go in the air)."""
+    bad = copy.deepcopy(trace)
+    last_held = _held_states(bad, "cup")[-1]
+    for state in bad.states[last_held + 1:]:
+        state["objects"]["cup"][2] += 0.10
+    found = physics_findings(bad)
+    assert [(f.kind, f.what, f.line) for f in found] == [
+        ("support", "cup rests on nothing", last_held + 3)], found
+    assert found[0].value == pytest.approx(10.0, abs=0.15) and found[0].unit == "cm"
+    assert found[0].t == bad.states[last_held + 1]["t"]
+    # and 3 mm is a physics engine's settling, not a finding
+    for state in bad.states[last_held + 1:]:
+        state["objects"]["cup"][2] -= 0.097
+    assert physics_findings(bad) == []

@@ -138,7 +138,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                              "meshes; independent of the planner's check); and physics: "
                              "fingertips at most 2 mm inside what they hold, upright items "
                              "within their tilt, base accelerations within the header's "
-                             "limits, items at their targets within 10 degrees of yaw")
+                             "limits, items at their targets within 10 degrees of yaw, every "
+                             "item out of the hand standing on something")
     replay.add_argument("--tolerance-cm", default=1.0,
                         type=float_in_range(0, 100, "centimetres > 0 and <= 100",
                                             open_minimum=True),

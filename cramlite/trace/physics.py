@@ -14,6 +14,9 @@ From the recorded states alone (no planner code):
 - yaw: at the end, an item put at a target of the setup (setting the table; clearing up
   into its container) stands within `YAW_TOLERANCE_DEG` of the target's yaw, up to the
   item's symmetry;
+- support: an item out of the hand stands on something (a surface, a drawer's or the
+  cupboard's inside, another item, the floor) wherever it comes to be: its lowest points
+  at most `SUPPORT_GAP_M` above it; one let go in the air is found with its height;
 - impossible states: a joint beyond the URDF's limits (as the header states them), an
   object's quaternion that is not a rotation, a base nowhere near any kitchen.
 
@@ -29,7 +32,13 @@ import numpy as np
 
 from cramlite.motion.base_timing import BaseLimits
 from cramlite.scene.transforms import quat_yaw
-from cramlite.trace.check import TraceChecker, checker_for, object_frame, penetration
+from cramlite.trace.check import (
+    TraceChecker,
+    checker_for,
+    depth_inside,
+    object_frame,
+    penetration,
+)
 from cramlite.trace.format import Trace
 
 GRIP_TOLERANCE_M = 0.002
@@ -37,6 +46,9 @@ GRIP_TOLERANCE_M = 0.002
 #: the limits by up to this share of the limit.
 ACCEL_TOLERANCE = 0.05
 YAW_TOLERANCE_DEG = 10.0
+#: An item out of the hand rests on what is at most this far below its lowest points (a
+#: physics engine's items settle within a millimetre or two of their support).
+SUPPORT_GAP_M = 0.005
 FINGERTIPS = ("gripper_l_finger_tip_link", "gripper_r_finger_tip_link")
 #: A gripper whose fingers are open this far or wider grips nothing (an open hand that
 #: brushes a handle on its way is a contact, judged by the penetration check).
@@ -47,7 +59,8 @@ OPEN_FINGER_RAD = 0.54
 class Finding:
     """One thing the robot could not have done so."""
 
-    #: grip | tilt | base acceleration | yaw | joint limit | orientation | base | header
+    #: grip | tilt | base acceleration | yaw | support | joint limit | orientation | base |
+    #: header
     kind: str
     what: str
     value: float
@@ -78,6 +91,8 @@ def physics_findings(trace: Trace, checker: TraceChecker | None = None) -> list[
     for finding in _base_accelerations(trace):
         note(finding)
     for finding in _yaws(trace, checker):
+        note(finding)
+    for finding in _supports(trace, checker):
         note(finding)
     for finding in _impossible(trace):
         note(finding)
@@ -254,6 +269,95 @@ def _base_accelerations(trace: Trace):
             line = int(min(k, len(states) - 1)) + 2
             yield Finding("base acceleration", what, round(float(values[k]), 2),
                           round(limit, 2), unit, float(t[min(k, len(t) - 1)]), line)
+
+
+def _supports(trace: Trace, checker: TraceChecker):
+    """Each pose an item takes out of the hand (checked once per pose, and again where
+    the drawer it stands in moves): is there something within `SUPPORT_GAP_M` below its
+    lowest points? If not, how far below the next thing is."""
+    last: dict[str, tuple] = {}
+    points: dict[int, np.ndarray] = {}  # each item body's surface points (its frame)
+    everywhere = (np.full(3, -1e3), np.full(3, 1e3))
+    for body in (b for bodies in checker.item_bodies.values() for b in bodies):
+        points[id(body)] = body.points_within(*everywhere, True)
+    for i, state in enumerate(trace.states):
+        kitchen = None
+        for name, pose in state["objects"].items():
+            if name in state["held"] or name not in checker.item_bodies:
+                last.pop(name, None)
+                continue
+            key = (tuple(pose), tuple(state["w"]))
+            if last.get(name) == key:
+                continue
+            last[name] = key
+            if kitchen is None:
+                frames = checker.kitchen_frames(state)
+                kitchen = _Boxed([(body, frames[body.owner] @ body.shape.in_link)
+                                  for body in checker.kitchen_bodies])
+            gap = _gap_below(checker, name, state, kitchen, points)
+            if gap > SUPPORT_GAP_M:
+                yield Finding("support", f"{name} rests on nothing", round(gap * 100, 1),
+                              SUPPORT_GAP_M * 100, "cm", state["t"], i + 2)
+
+
+class _Boxed:
+    """Placed bodies with their world bounding boxes, to pick those under a few points."""
+
+    def __init__(self, placed: list[tuple]):
+        self.placed = placed
+        if placed:
+            rotations = np.array([where[:3, :3] for _, where in placed])
+            centres = np.array([body.shape.centre for body, _ in placed])
+            halves = np.array([body.shape.half for body, _ in placed])
+            self.mid = (rotations @ centres[:, :, None])[:, :, 0] + \
+                np.array([where[:3, 3] for _, where in placed])
+            self.span = (np.abs(rotations) @ halves[:, :, None])[:, :, 0]
+
+    def under(self, lo: np.ndarray, hi: np.ndarray, top: float) -> list[tuple]:
+        """The bodies whose boxes meet lo..hi in x and y and reach below `top`."""
+        if not self.placed:
+            return []
+        keep = np.all(self.mid[:, :2] - self.span[:, :2] <= hi, axis=1) & \
+            np.all(self.mid[:, :2] + self.span[:, :2] >= lo, axis=1) & \
+            (self.mid[:, 2] - self.span[:, 2] < top)
+        return [self.placed[k] for k in np.flatnonzero(keep)]
+
+
+def _gap_below(checker: TraceChecker, name: str, state: dict, kitchen: _Boxed,
+               points: dict[int, np.ndarray]) -> float:
+    """How far the lowest points of an item are above what is under them (to 1 mm; 0 if
+    within `SUPPORT_GAP_M`), the floor at the latest."""
+    frame = object_frame(state["objects"][name])
+    world = []
+    for body in checker.item_bodies[name]:
+        placed = frame @ body.shape.in_link
+        world.append(points[id(body)] @ placed[:3, :3].T + placed[:3, 3])
+    every = np.vstack(world)
+    low = float(every[:, 2].min())
+    bottom = every[every[:, 2] <= low + 0.002]
+    lo, hi = bottom[:, :2].min(axis=0), bottom[:, :2].max(axis=0)
+    items = _Boxed([(body, object_frame(state["objects"][other]) @ body.shape.in_link)
+                    for other, bodies in checker.item_bodies.items()
+                    if other != name and other in state["objects"]
+                    and other not in state["held"] for body in bodies])
+    others = kitchen.under(lo, hi, low) + items.under(lo, hi, low)
+
+    def meets(drop: float) -> bool:
+        lowered = bottom - (0.0, 0.0, drop)
+        return any(depth_inside(lowered, body, where, 0.0) > 0.0 for body, where in others)
+
+    if low <= SUPPORT_GAP_M or meets(SUPPORT_GAP_M):
+        return 0.0
+    above = SUPPORT_GAP_M
+    for drop in np.arange(0.01, low, 0.01):
+        if meets(float(drop)):  # somewhere between the last step and this one: to 1 mm
+            below = float(drop)
+            while below - above > 0.001:
+                middle = (above + below) / 2
+                above, below = (above, middle) if meets(middle) else (middle, below)
+            return above
+        above = float(drop)
+    return max(0.0, low)  # (the floor)
 
 
 def _yaws(trace: Trace, checker: TraceChecker):
