@@ -34,7 +34,8 @@ class PlanReport:
     #: A user's plan's own verdict (None: no failures = success). The built-in plans leave
     #: it None: the trial checks where the items ended.
     success: bool | None = None
-    #: The items fetched together on each trip, in fetch order (one each with carry 1).
+    #: The items fetched together on each trip, in fetch order (one each with carry 1);
+    #: a trip that failed is one, and an item tried again at the end is in a trip again.
     trips: list[list[str]] = field(default_factory=list)
 
     def __repr__(self) -> str:

@@ -71,8 +71,9 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
     plan option `carry` 2 (`--carry 2`) the strategy is asked for a batch, one item per
     hand (`choose_batch`), fetched one after the other and then delivered in that order;
     an item that cannot share a trip (see `shares_a_trip`) is carried alone. An item whose
-    transport failed where it stands is tried once more when the others are done (see
-    `can_try_again`); the order reports the strategy's choices, once each."""
+    transport failed where it stands is tried once more when the others are done, if any
+    other item moved since (see `can_try_again`); the order reports the strategy's
+    choices, once each, and the trips every trip made (the failed one too)."""
     remaining = [n for n in setup.baseline_order if n in goals]
     carry = carry_option(ctx)
     try:
@@ -93,7 +94,9 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
     checked_reset(strategy, [item_candidate(ctx, setup, n, then_at(n)) for n in remaining],
                   robot_position(ctx))
     alone: set[str] = set()  # (a second fetch failed with one hand full: alone next time)
-    again: list[str] = []  # (failed once where it stands: tried again when the rest is done)
+    #: (item, failure, where every item stood then): failed where it stands, tried again
+    #: when the rest is done
+    again: list[tuple[str, PlanFailure, dict]] = []
     while remaining:
         candidates = [item_candidate(ctx, setup, n, then_at(n)) for n in remaining]
         here = robot_position(ctx)
@@ -116,14 +119,9 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
                 TransportAction(ObjectDesignatorDescription(names=names),
                                 **goals[names[0]]).perform(ctx)
             except PlanFailure as failure:
-                if can_try_again(ctx, names[0]):
-                    ctx.note(f"failed: {failure}; trying {names[0]} again at the end")
-                    again.append(names[0])
-                else:
-                    ctx.note(f"failed: {failure}")
-                    report.failures.append(failure)
+                _failed(ctx, names[0], failure, report, again)
         else:
-            back = _carry_together(ctx, names, goals, report)
+            back = _carry_together(ctx, names, goals, report, again)
             for name in back:  # (not fetched: asked about again, carried alone)
                 report.order.remove(name)
                 report.trips[-1].remove(name)
@@ -134,7 +132,11 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
         report.add_trip(here[:2], [c.position[:2] for c in batch if c.name in report.order],
                         [ctx.scene.object_pose(c.name)[0][:2] for c in batch
                          if c.name in report.order])
-    for name in again:  # the others gone, what was in the way of it may be too
+    for name, failure, then in again:
+        if not _others_moved(ctx, name, then):  # the same world: the same failure
+            report.failures.append(failure)
+            continue
+        ctx.note(f"trying {name} again (other items moved since it failed)")
         here = robot_position(ctx)
         position = ctx.scene.object_pose(name)[0][:2]
         try:
@@ -154,6 +156,26 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
             ctx.note(f"failed: {failure}")
             report.failures.append(failure)
     return report
+
+
+def _failed(ctx: RobotContext, name: str, failure: PlanFailure, report: PlanReport,
+            again: list[tuple[str, PlanFailure, dict]]) -> None:
+    """A transport failed: reported, or, if it may be tried again, kept for the end."""
+    ctx.note(f"failed: {failure}")
+    if can_try_again(ctx, name):
+        again.append((name, failure, _positions(ctx)))
+    else:
+        report.failures.append(failure)
+
+
+def _positions(ctx: RobotContext) -> dict[str, tuple[float, float, float]]:
+    return {n: ctx.scene.object_pose(n)[0] for n in ctx.scene.items}
+
+
+def _others_moved(ctx: RobotContext, name: str, then: dict) -> bool:
+    """Has an item other than `name` moved by more than 1 cm since `then`?"""
+    return any(math.dist(p, then[n]) > 0.01 for n, p in _positions(ctx).items()
+               if n != name and n in then)
 
 
 def can_try_again(ctx: RobotContext, name: str) -> bool:
@@ -189,11 +211,12 @@ def shares_a_trip(ctx: RobotContext, name: str, goal: dict) -> bool:
 
 
 def _carry_together(ctx: RobotContext, names: list[str], goals: dict[str, dict],
-                    report: PlanReport) -> list[str]:
+                    report: PlanReport, again: list[tuple[str, PlanFailure, dict]],
+                    ) -> list[str]:
     """Fetch each item with a free hand, then deliver them in the same order. A failed
-    first fetch is a failure of that item; after it, and after a failed later fetch, the
-    items not yet fetched are returned (the plan asks about them again and carries them
-    alone)."""
+    first fetch is a failure of that item (see `_failed`); after it, and after a failed
+    later fetch, the items not yet fetched are returned (the plan asks about them again
+    and carries them alone)."""
     fetched: list[Fetched] = []
     for index, name in enumerate(names):
         try:
@@ -204,8 +227,7 @@ def _carry_together(ctx: RobotContext, names: list[str], goals: dict[str, dict],
                          "carried alone later")
                 back = names[index:]
             else:
-                ctx.note(f"failed: {failure}")
-                report.failures.append(failure)
+                _failed(ctx, name, failure, report, again)
                 back = names[index + 1:]
             break
     else:
@@ -214,8 +236,7 @@ def _carry_together(ctx: RobotContext, names: list[str], goals: dict[str, dict],
         try:
             DeliverAction(item.obj, fetched=item, **goals[item.obj]).perform(ctx)
         except PlanFailure as failure:
-            ctx.note(f"failed: {failure}")
-            report.failures.append(failure)
+            _failed(ctx, item.obj, failure, report, again)
     return back
 
 

@@ -177,3 +177,21 @@ def test_an_item_left_in_the_air_is_found_with_its_height(trace) -> None:
     for state in bad.states[last_held + 1:]:
         state["objects"]["cup"][2] -= 0.097
     assert physics_findings(bad) == []
+
+
+def test_an_item_whose_support_is_taken_away_is_found(trace) -> None:
+    """The milk stood on the cup (as it could): when the cup is picked up, the milk hangs
+    in the air, though it did not move."""
+    from cramlite.trace.check import checker_for
+
+    bad = copy.deepcopy(trace)
+    top = max(b.shape.centre[2] + b.shape.half[2] for b in checker_for(bad).item_bodies["cup"])
+    first_cup, first_milk = _held_states(bad, "cup")[0], _held_states(bad, "milk")[0]
+    assert first_cup < first_milk  # (the baseline order takes the cup first)
+    x, y, z = bad.states[0]["objects"]["cup"][:3]
+    for state in bad.states[:first_milk]:
+        state["objects"]["milk"][:3] = [x, y, z + top]
+    found = physics_findings(bad)
+    assert [(f.kind, f.what, f.line) for f in found] == [
+        ("support", "milk rests on nothing", first_cup + 2)], found
+    assert found[0].value == pytest.approx(top * 100, abs=0.15), found[0].value

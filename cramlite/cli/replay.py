@@ -77,8 +77,8 @@ def _replay(args: argparse.Namespace, trace) -> int:
         for finding in physics:
             print(f"not physical: {finding.describe()}")
         print(f"physics (fingers against what they hold, upright items, base accelerations, "
-              f"yaw at the targets): {'nothing' if not physics else len(physics)} "
-              "found")
+              f"yaw at the targets, items standing on something): "
+              f"{'nothing' if not physics else len(physics)} found")
         status = EXIT_PLAN_FAILED if found or physics else EXIT_OK
     if args.out:
         from cramlite.trace.replay import frame_count, render_gif

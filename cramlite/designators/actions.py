@@ -380,21 +380,24 @@ class TransportAction(ActionDesignator):
                 target = _at(ctx, destination, local)
             self._deliver(ctx, obj, planned, target)
         except PlanFailure as failure:
+            arm = picked_from.arm
+            others = [a for a in (self.arms or ARMS) if a != arm and a not in ctx.holding]
+            if obj.name in held(ctx):
+                ctx.note(f"could not put {obj.name} down with the {arm} arm ({failure.kind}: "
+                         f"{failure.reason}); putting it back")
             put_down = self._put_back(ctx, obj, origin, picked_from)
-            others = [a for a in (self.arms or ARMS)
-                      if a != picked_from.arm and a not in ctx.holding]
             if not put_down or not others:  # (not where it could be taken from again)
                 raise
             # the goal was reachable with this hand, but not the way there (e.g. into a
             # cupboard past its side wall): the other hand takes it from where it is now
-            ctx.note(f"could not put {obj.name} down with the {picked_from.arm} arm "
-                     f"({failure.kind}); taking it with the {' or '.join(others)} arm")
+            ctx.note(f"taking {obj.name} with the {' or '.join(others)} arm")
             ParkArmsAction().perform(ctx)
             try:
                 at_rest = replace(self, object=obj, arms=others).perform(ctx)
             except PlanFailure as second:
                 raise type(second)(second.reason, obj=obj.name, tried=[
-                    f"{picked_from.arm} arm: {failure.kind}: {failure.reason}",
+                    f"{arm} arm: {failure.kind}: {failure.reason}", *failure.tried,
+                    f"{' or '.join(others)} arm: {second.kind}: {second.reason}",
                     *second.tried]) from second
             for container in to_close:
                 _closed_now(ctx, CloseAction, container)
@@ -545,13 +548,16 @@ class TransportAction(ActionDesignator):
                   picked_from: ReachablePose) -> bool:
         """After a failed delivery nothing stays in hand: put the object back where it was
         taken from (from the same base pose, the pick's own checked configurations in
-        reverse), else on the same surface, as near to it as it can, or, if even that
-        fails, let go of it. True if it was put down."""
+        reverse), else on the same surface (or, if it came out of a drawer or cupboard
+        closed since, the nearest surface an item of the setup stands on), as near to it
+        as it can, or, if even that fails, let go of it. True if it was put down."""
         arm = next((a for a, h in ctx.holding.items() if h.obj == obj.name), None)
         if arm is None:
             return False
         try:
             try:
+                # (where it was may be in the air now: its drawer closed since)
+                check_resting_place(ctx, obj.name, origin)
                 NavigateAction(picked_from.base).perform(ctx)
                 # (a new IK solution for the same spot may be another elbow, one that
                 # touches the table: the pick's own solution did not)
@@ -560,12 +566,11 @@ class TransportAction(ActionDesignator):
                                relative=ctx.holding[arm].relative)
                 PlaceAction(obj, origin, reach=undo).perform(ctx)
             except PlanFailure:
-                surface = ctx.scene.surface_under(*origin, RESTING_HEIGHT_TOLERANCE_M)
+                surface = _surface_near(ctx, origin)
                 if obj.name not in held(ctx) or surface is None:
                     raise
                 ParkArmsAction(arm).perform(ctx)
-                beside = TransportAction(obj, surface=surface.name, preferred=origin,
-                                         arms=[arm])
+                beside = TransportAction(obj, surface=surface, preferred=origin, arms=[arm])
                 beside._deliver(ctx, obj)
             (x, y, _), _ = obj.pose(ctx)
             ctx.note(f"put {obj.name} back at ({x:.2f}, {y:.2f})")
@@ -579,6 +584,23 @@ class TransportAction(ActionDesignator):
             return False
         finally:
             ctx.footprint_stale = True
+
+
+def _surface_near(ctx: RobotContext, point: Vec3) -> str | None:
+    """The surface under a point, else the one nearest to it (in x and y) of those the
+    setup's items stand on."""
+    under = ctx.scene.surface_under(*point, RESTING_HEIGHT_TOLERANCE_M)
+    if under is not None:
+        return under.name
+    names = sorted({spec.surface for spec in ctx.scene.setup.items if not spec.container})
+
+    def away(name: str) -> float:
+        surf = ctx.scene.surface(name)
+        dx = max(surf.x_min - point[0], 0.0, point[0] - surf.x_max)
+        dy = max(surf.y_min - point[1], 0.0, point[1] - surf.y_max)
+        return math.hypot(dx, dy)
+
+    return min(names, key=away, default=None)
 
 
 def _closed_now(ctx: RobotContext, close, container) -> bool:

@@ -272,9 +272,9 @@ def _base_accelerations(trace: Trace):
 
 
 def _supports(trace: Trace, checker: TraceChecker):
-    """Each pose an item takes out of the hand (checked once per pose, and again where
-    the drawer it stands in moves): is there something within `SUPPORT_GAP_M` below its
-    lowest points? If not, how far below the next thing is."""
+    """Each pose an item takes out of the hand (checked once per pose, and again where a
+    drawer or door moves or an item is taken or let go): is there something within
+    `SUPPORT_GAP_M` below its lowest points? If not, how far below the next thing is."""
     last: dict[str, tuple] = {}
     points: dict[int, np.ndarray] = {}  # each item body's surface points (its frame)
     everywhere = (np.full(3, -1e3), np.full(3, 1e3))
@@ -286,7 +286,9 @@ def _supports(trace: Trace, checker: TraceChecker):
             if name in state["held"] or name not in checker.item_bodies:
                 last.pop(name, None)
                 continue
-            key = (tuple(pose), tuple(state["w"]))
+            # (again where its drawer moves, or anything is taken or put down: what it
+            # stood on may have gone)
+            key = (tuple(pose), tuple(state["w"]), tuple(sorted(state["held"])))
             if last.get(name) == key:
                 continue
             last[name] = key
