@@ -134,6 +134,7 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
                          if c.name in report.order])
     for name, failure, then in again:
         if not _others_moved(ctx, name, then):  # the same world: the same failure
+            ctx.note(f"not trying {name} again: nothing has moved since it failed")
             report.failures.append(failure)
             continue
         ctx.note(f"trying {name} again (other items moved since it failed)")
@@ -159,11 +160,13 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
 
 
 def _failed(ctx: RobotContext, name: str, failure: PlanFailure, report: PlanReport,
-            again: list[tuple[str, PlanFailure, dict]]) -> None:
-    """A transport failed: reported, or, if it may be tried again, kept for the end."""
+            again: list[tuple[str, PlanFailure, dict]], then: dict | None = None) -> None:
+    """A transport failed: reported, or, if it may be tried again, kept for the end, with
+    where the items stood `then` (by default now; a trip carrying two: when it began,
+    as the item delivered before this one may be what was in its way)."""
     ctx.note(f"failed: {failure}")
     if can_try_again(ctx, name):
-        again.append((name, failure, _positions(ctx)))
+        again.append((name, failure, then if then is not None else _positions(ctx)))
     else:
         report.failures.append(failure)
 
@@ -218,6 +221,7 @@ def _carry_together(ctx: RobotContext, names: list[str], goals: dict[str, dict],
     later fetch, the items not yet fetched are returned (the plan asks about them again
     and carries them alone)."""
     fetched: list[Fetched] = []
+    then = _positions(ctx)
     for index, name in enumerate(names):
         try:
             fetched.append(FetchAction(name, **goals[name]).perform(ctx))
@@ -227,7 +231,7 @@ def _carry_together(ctx: RobotContext, names: list[str], goals: dict[str, dict],
                          "carried alone later")
                 back = names[index:]
             else:
-                _failed(ctx, name, failure, report, again)
+                _failed(ctx, name, failure, report, again, then)
                 back = names[index + 1:]
             break
     else:
@@ -236,7 +240,7 @@ def _carry_together(ctx: RobotContext, names: list[str], goals: dict[str, dict],
         try:
             DeliverAction(item.obj, fetched=item, **goals[item.obj]).perform(ctx)
         except PlanFailure as failure:
-            _failed(ctx, item.obj, failure, report, again)
+            _failed(ctx, item.obj, failure, report, again, then)
     return back
 
 

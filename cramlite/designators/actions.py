@@ -549,13 +549,20 @@ class TransportAction(ActionDesignator):
         """After a failed delivery nothing stays in hand: put the object back where it was
         taken from (from the same base pose, the pick's own checked configurations in
         reverse), else on the same surface (or, if it came out of a drawer or cupboard
-        closed since, the nearest surface an item of the setup stands on), as near to it
-        as it can, or, if even that fails, let go of it. True if it was put down."""
+        closed since, the nearest surface an item of the setup stands on outside them), as
+        near to it as it can, or, if even that fails, let go of it. True if it was put
+        down."""
         arm = next((a for a, h in ctx.holding.items() if h.obj == obj.name), None)
         if arm is None:
             return False
+        from cramlite.designators.storage import container_at, is_open
+
+        inside, _ = container_at(ctx, origin)
+        shut = inside is not None and not is_open(ctx, inside)  # (its door closed since)
         try:
             try:
+                if shut:
+                    raise PlacementFailed(f"{inside.name} is closed now", obj=obj.name)
                 # (where it was may be in the air now: its drawer closed since)
                 check_resting_place(ctx, obj.name, origin)
                 NavigateAction(picked_from.base).perform(ctx)
@@ -566,7 +573,7 @@ class TransportAction(ActionDesignator):
                                relative=ctx.holding[arm].relative)
                 PlaceAction(obj, origin, reach=undo).perform(ctx)
             except PlanFailure:
-                surface = _surface_near(ctx, origin)
+                surface = _surface_near(ctx, origin, under=not shut)
                 if obj.name not in held(ctx) or surface is None:
                     raise
                 ParkArmsAction(arm).perform(ctx)
@@ -575,23 +582,23 @@ class TransportAction(ActionDesignator):
             (x, y, _), _ = obj.pose(ctx)
             ctx.note(f"put {obj.name} back at ({x:.2f}, {y:.2f})")
             return True
-        except PlanFailure:
+        except PlanFailure as failure:
             if arm in ctx.holding:
                 DetachMotion(arm, obj.name).perform(ctx)
                 del ctx.holding[arm]
                 ctx.settle([obj.name])
-                ctx.note(f"let go of {obj.name}")
+                ctx.note(f"let go of {obj.name} (could not put it back: {failure.reason})")
             return False
         finally:
             ctx.footprint_stale = True
 
 
-def _surface_near(ctx: RobotContext, point: Vec3) -> str | None:
-    """The surface under a point, else the one nearest to it (in x and y) of those the
-    setup's items stand on."""
-    under = ctx.scene.surface_under(*point, RESTING_HEIGHT_TOLERANCE_M)
-    if under is not None:
-        return under.name
+def _surface_near(ctx: RobotContext, point: Vec3, under: bool = True) -> str | None:
+    """The surface under a point (with `under`), else the one nearest to it (in x and y)
+    of those the setup's items stand on outside drawers and cupboards."""
+    below = ctx.scene.surface_under(*point, RESTING_HEIGHT_TOLERANCE_M) if under else None
+    if below is not None:
+        return below.name
     names = sorted({spec.surface for spec in ctx.scene.setup.items if not spec.container})
 
     def away(name: str) -> float:
