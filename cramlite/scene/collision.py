@@ -35,9 +35,11 @@ import numpy as np
 
 from cramlite.scene.geometry import (
     PointGrid,
+    bounds_at,
     boxes_apart,
     convex_hull_planes,
     inside_mesh,
+    placed_bounds,
     point_triangle_distances,
     primitive_depth,
     surface_samples,
@@ -159,24 +161,6 @@ class _ObstaclesByState:
 def _transform(matrix: np.ndarray) -> coal.Transform3s:
     return coal.Transform3s(np.ascontiguousarray(matrix[:3, :3]),
                             np.ascontiguousarray(matrix[:3, 3]))
-
-
-def _bounds(shapes: Sequence[Shape], placements: np.ndarray,
-            ) -> tuple[np.ndarray, np.ndarray]:
-    """Axis-aligned bounds (lo, hi: N x 3) of placed shapes (their local bounds turned)."""
-    if not len(shapes):
-        return np.zeros((0, 3)), np.zeros((0, 3))
-    return _placed_bounds(np.array([s.centre for s in shapes]),
-                          np.array([s.half for s in shapes]), placements)
-
-
-def _placed_bounds(centres: np.ndarray, halves: np.ndarray, placements: np.ndarray,
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """`_bounds` of shapes given by their local bounds' centres and half sizes (N x 3)."""
-    rotations = placements[:, :3, :3]
-    mid = (rotations @ centres[:, :, None])[:, :, 0] + placements[:, :3, 3]
-    span = (np.abs(rotations) @ halves[:, :, None])[:, :, 0]
-    return mid - span, mid + span
 
 
 class SceneCollisions:
@@ -500,7 +484,7 @@ class SceneCollisions:
             frames = self.scene.kitchen_frames(world_joints)
             shapes = self.scene.kitchen.shapes
             placements = np.array([frames[s.link] @ s.in_link for s in shapes]).reshape(-1, 4, 4)
-            block = self._kitchen[key] = (placements, *_bounds(shapes, placements))
+            block = self._kitchen[key] = (placements, *placed_bounds(shapes, placements))
         return block
 
 
@@ -581,8 +565,8 @@ class MotionCheck:
         lo, hi = np.empty((len(self.obstacles), 3)), np.empty((len(self.obstacles), 3))
         lo[layout.kitchen], hi[layout.kitchen] = kitchen_lo, kitchen_hi
         if others:
-            lo[others], hi[others] = _placed_bounds(layout.centres[others],
-                                                    layout.halves[others], placements[others])
+            lo[others], hi[others] = bounds_at(layout.centres[others],
+                                               layout.halves[others], placements[others])
         self._lo, self._hi = lo, hi
         self._lo_t, self._hi_t = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)
         # each obstacle's bounds as an oriented box (axes, centre; half sizes: the layout's)
@@ -677,8 +661,8 @@ class MotionCheck:
         if len(items) and not carried:  # (the items lie as believed now, in every state)
             placements[:, items] = self._item_placements(
                 [scene.item_matrix(name) for name in layout.item_names])
-            lo[:, items], hi[:, items] = _placed_bounds(layout.centres[items],
-                                                        layout.halves[items], placements[0, items])
+            lo[:, items], hi[:, items] = bounds_at(layout.centres[items],
+                                                   layout.halves[items], placements[0, items])
         for i, value in enumerate(values):
             placed, kitchen_lo, kitchen_hi = self.owner.kitchen_block(
                 {**scene.belief.world_joints, joint: float(value)})
@@ -688,9 +672,9 @@ class MotionCheck:
                 with scene.world_joint_at(joint, float(value), carry=True):
                     poses = [scene.item_matrix(name) for name in layout.item_names]
                 placements[i, items] = self._item_placements(poses)
-                lo[i, items], hi[i, items] = _placed_bounds(layout.centres[items],
-                                                            layout.halves[items],
-                                                            placements[i, items])
+                lo[i, items], hi[i, items] = bounds_at(layout.centres[items],
+                                                       layout.halves[items],
+                                                       placements[i, items])
         axes = placements[..., :3, :3]
         centres = (axes @ layout.centres[None, :, :, None])[..., 0] + placements[..., :3, 3]
         return _ObstaclesByState(placements, lo, hi, np.ascontiguousarray(lo.transpose(2, 0, 1)),

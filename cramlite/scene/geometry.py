@@ -11,6 +11,7 @@ do), so it is the inside test here.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import coal
 import numpy as np
@@ -209,3 +210,21 @@ def boxes_apart(axes_a: np.ndarray, centres_a: np.ndarray, halves_a: np.ndarray,
     t_b = (t[:, None, :] @ r)[:, 0]
     apart |= (np.abs(t_b) > (halves_a[:, None, :] @ ar)[:, 0] + halves_b + gap).any(axis=1)
     return apart
+
+
+def placed_bounds(shapes: Sequence[Shape], placements: np.ndarray,
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned bounds (lo, hi: N x 3) of placed shapes (their local bounds turned)."""
+    if not len(shapes):
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    return bounds_at(np.array([s.centre for s in shapes]), np.array([s.half for s in shapes]),
+                     placements)
+
+
+def bounds_at(centres: np.ndarray, halves: np.ndarray, placements: np.ndarray,
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """`placed_bounds` of shapes given by their local bounds' centres and half sizes (N x 3)."""
+    rotations = placements[:, :3, :3]
+    mid = (rotations @ centres[:, :, None])[:, :, 0] + placements[:, :3, 3]
+    span = (np.abs(rotations) @ halves[:, :, None])[:, :, 0]
+    return mid - span, mid + span

@@ -30,6 +30,7 @@ import numpy as np
 
 from cramlite.scene.geometry import (
     PointGrid,
+    placed_bounds,
     point_triangle_distances,
     primitive_depth,
     surface_samples,
@@ -303,11 +304,7 @@ class TraceChecker:
                     bodies.append(body)
                     placements.append(item_frames[name] @ body.shape.in_link)
         placed = np.array(placements)
-        centres = np.array([b.shape.centre for b in bodies])
-        halves = np.array([b.shape.half for b in bodies])
-        mid = (placed[:, :3, :3] @ centres[:, :, None])[:, :, 0] + placed[:, :3, 3]
-        span = (np.abs(placed[:, :3, :3]) @ halves[:, :, None])[:, :, 0]
-        lo, hi = mid - span, mid + span
+        lo, hi = placed_bounds([b.shape for b in bodies], placed)
         pairs = self._pairs(bodies, held, manipulated, item_frames)
         if not len(pairs):
             return

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cramlite.motion.base_timing import BaseLimits
+from cramlite.scene.geometry import placed_bounds
 from cramlite.scene.transforms import quat_yaw
 from cramlite.trace.check import (
     TraceChecker,
@@ -307,21 +308,13 @@ class _Boxed:
 
     def __init__(self, placed: list[tuple]):
         self.placed = placed
-        if placed:
-            rotations = np.array([where[:3, :3] for _, where in placed])
-            centres = np.array([body.shape.centre for body, _ in placed])
-            halves = np.array([body.shape.half for body, _ in placed])
-            self.mid = (rotations @ centres[:, :, None])[:, :, 0] + \
-                np.array([where[:3, 3] for _, where in placed])
-            self.span = (np.abs(rotations) @ halves[:, :, None])[:, :, 0]
+        self.lo, self.hi = placed_bounds([body.shape for body, _ in placed],
+                                         np.array([where for _, where in placed]))
 
     def under(self, lo: np.ndarray, hi: np.ndarray, top: float) -> list[tuple]:
         """The bodies whose boxes meet lo..hi in x and y and reach below `top`."""
-        if not self.placed:
-            return []
-        keep = np.all(self.mid[:, :2] - self.span[:, :2] <= hi, axis=1) & \
-            np.all(self.mid[:, :2] + self.span[:, :2] >= lo, axis=1) & \
-            (self.mid[:, 2] - self.span[:, 2] < top)
+        keep = np.all(self.lo[:, :2] <= hi, axis=1) & np.all(self.hi[:, :2] >= lo, axis=1) \
+            & (self.lo[:, 2] < top)
         return [self.placed[k] for k in np.flatnonzero(keep)]
 
 
