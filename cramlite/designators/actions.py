@@ -380,30 +380,10 @@ class TransportAction(ActionDesignator):
                 target = _at(ctx, destination, local)
             self._deliver(ctx, obj, planned, target)
         except PlanFailure as failure:
-            arm = picked_from.arm
-            others = [a for a in (self.arms or ARMS) if a != arm and a not in ctx.holding]
-            if obj.name in held(ctx):
-                ctx.note(f"could not put {obj.name} down with the {arm} arm ({failure.kind}: "
-                         f"{failure.reason}); putting it back")
-            put_down = self._put_back(ctx, obj, origin, picked_from)
-            if not put_down or not others:  # (not where it could be taken from again)
-                raise
-            # the goal was reachable with this hand, but not the way there (e.g. into a
-            # cupboard past its side wall): the other hand takes it from where it is now
-            ctx.note(f"taking {obj.name} with the {' or '.join(others)} arm")
-            ParkArmsAction().perform(ctx)
-            try:
-                at_rest = replace(self, object=obj, arms=others).perform(ctx)
-            except PlanFailure as second:
-                raise type(second)(second.reason, obj=obj.name, tried=[
-                    f"{arm} arm: {failure.kind}: {failure.reason}", *failure.tried,
-                    f"{' or '.join(others)} arm: {second.kind}: {second.reason}",
-                    *second.tried]) from second
-            for container in to_close:
-                _closed_now(ctx, CloseAction, container)
-            return at_rest
-        if destination is not None and not ctx.options.keep_containers_open:
-            to_close.append(destination)  # the item is in: close it
+            self._with_the_other_hand(ctx, obj, origin, picked_from, failure)
+        else:
+            if destination is not None and not ctx.options.keep_containers_open:
+                to_close.append(destination)  # the item is in: close it
         for container in to_close:  # (what cannot be closed now, the plan closes at its end)
             _closed_now(ctx, CloseAction, container)
         return obj.pose(ctx)[0]  # (where it came to rest)
@@ -543,6 +523,31 @@ class TransportAction(ActionDesignator):
     def _yaw(self, target: Vec3 | None) -> float | None:
         """The yaw to put it down at: the target yaw, where there is a target."""
         return self.target_yaw if target is not None else None
+
+    def _with_the_other_hand(self, ctx: RobotContext, obj: ObjectDesignator, origin: Vec3,
+                             picked_from: ReachablePose, failure: PlanFailure) -> None:
+        """After a failed delivery: put the object back and transport it with the other
+        hand (of `arms`, if free), which also delivers it (and closes what it opens); if
+        it cannot be put back, or there is no other hand, or that fails too, raise."""
+        arm = picked_from.arm
+        others = [a for a in (self.arms or ARMS) if a != arm and a not in ctx.holding]
+        if obj.name in held(ctx):
+            ctx.note(f"could not put {obj.name} down with the {arm} arm ({failure.kind}: "
+                     f"{failure.reason}); putting it back")
+        put_down = self._put_back(ctx, obj, origin, picked_from)
+        if not put_down or not others:  # (not where it could be taken from again)
+            raise failure
+        # the goal was reachable with this hand, but not the way there (e.g. into a
+        # cupboard past its side wall): the other hand takes it from where it is now
+        ctx.note(f"taking {obj.name} with the {' or '.join(others)} arm")
+        ParkArmsAction().perform(ctx)
+        try:
+            replace(self, object=obj, arms=others).perform(ctx)
+        except PlanFailure as second:
+            raise type(second)(second.reason, obj=obj.name, tried=[
+                f"{arm} arm: {failure.kind}: {failure.reason}", *failure.tried,
+                f"{' or '.join(others)} arm: {second.kind}: {second.reason}",
+                *second.tried]) from second
 
     def _put_back(self, ctx: RobotContext, obj: ObjectDesignator, origin: Vec3,
                   picked_from: ReachablePose) -> bool:
