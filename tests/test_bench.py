@@ -86,6 +86,36 @@ def test_same_seed_same_rows_and_a_trial_reruns_alone(tmp_path: Path) -> None:
     assert not (b / "traces").exists()
 
 
+def test_workers_are_forked_where_safe_with_the_same_rows(tmp_path: Path) -> None:
+    """A bench forks its workers when it runs no other thread (they start with its
+    imports) and spawns them when it does; the rows are the same either way."""
+    code = """
+import sys, threading
+import cramlite.bench.execute as execute
+from cramlite.cli import main
+if sys.argv[2] == "thread":
+    stop = threading.Event()
+    threading.Thread(target=stop.wait, daemon=True).start()
+made = execute.LocalPool.__init__
+def init(self, workers):
+    made(self, workers)
+    print("start method:", self.start_method, file=sys.stderr)
+execute.LocalPool.__init__ = init
+sys.exit(main(["bench", "--out", sys.argv[1], *sys.argv[3:]]))
+"""
+    folders = {}
+    for case, method in (("plain", "fork" if sys.platform.startswith("linux") else "spawn"),
+                         ("thread", "spawn")):
+        folders[case] = tmp_path / case
+        done = subprocess.run([sys.executable, "-c", code, str(folders[case]), case, *SMALL,
+                               "--workers", "2"], capture_output=True, text=True, cwd=ROOT,
+                              timeout=600)
+        assert done.returncode == 0, done.stderr
+        assert f"start method: {method}" in done.stderr
+    assert comparable(folders["plain"]) == comparable(folders["thread"])
+    assert len(rows(folders["plain"])) == 4
+
+
 def test_interrupted_run_resumes_with_the_remaining_trials(tmp_path: Path) -> None:
     out = tmp_path / "r"
     args = [sys.executable, "-m", "cramlite", "bench", "--out", str(out), "--setups", "v1,v2",

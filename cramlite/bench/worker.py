@@ -36,11 +36,13 @@ def worker_name() -> str:
 
 
 def init_local_worker(started: Any, parent_pid: int) -> None:
-    """Initializer of local pool workers: Ctrl-C is the parent's business; tell the parent
+    """Initializer of local pool workers: Ctrl-C is the parent's business, and SIGTERM
+    ends a worker (a forked one has the bench's own handler until here); tell the parent
     when a trial starts (for its per-trial timeout); exit when the parent is gone (a
     killed bench leaves no workers behind)."""
     global _STARTED
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     _STARTED = started
 
     def watch_parent() -> None:

@@ -156,19 +156,15 @@ MAX_DRAWING_PROCESSES = 4
 def _draw_all(jobs: list[tuple[Callable[..., Any], tuple]],
               before: Callable[[], Any] | None = None) -> list[Any]:
     """Each job's result (`function(*arguments)`), in order. Drawn on a few forked
-    processes on Linux when there are several CPUs and this process runs no other Python
-    thread (a fork copies what `before()` imports, once; a thread's locks could be copied
-    held; JAX, loaded for a learned strategy, runs threads of its own; macOS's system
-    libraries are not safe to fork), else here one after the other: the same pictures
-    either way. The first job that fails stops the rest and raises here."""
+    processes when there are several CPUs and `cramlite.forking.fork_is_safe()` (a fork
+    copies what `before()` imports, once), else here one after the other: the same
+    pictures either way. The first job that fails stops the rest and raises here."""
     import multiprocessing
-    import sys
-    import threading
-    import warnings
+
+    from cramlite.forking import fork_is_safe, quiet_fork
 
     processes = min(os.cpu_count() or 1, MAX_DRAWING_PROCESSES, len(jobs))
-    if processes < 2 or not sys.platform.startswith("linux") or \
-            threading.active_count() > 1 or "jax" in sys.modules:
+    if processes < 2 or not fork_is_safe():
         return [function(*arguments) for function, arguments in jobs]
     from concurrent.futures import ProcessPoolExecutor
 
@@ -176,11 +172,7 @@ def _draw_all(jobs: list[tuple[Callable[..., Any], tuple]],
         before()
     pool = ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("fork"))
     try:
-        with warnings.catch_warnings():
-            # (Python 3.12+ warns of any thread at a fork; numpy's BLAS keeps idle ones,
-            # which are safe to fork: they hold no lock a picture needs)
-            warnings.filterwarnings("ignore", message=".*use of fork\\(\\) may lead to "
-                                    "deadlocks", category=DeprecationWarning)
+        with quiet_fork():
             futures = [pool.submit(function, *arguments) for function, arguments in jobs]
         return [future.result() for future in futures]
     finally:
