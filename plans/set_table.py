@@ -133,9 +133,11 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
                         [ctx.scene.object_pose(c.name)[0][:2] for c in batch
                          if c.name in report.order])
     for name, failure, then in again:
+        # (its failure stands in fetch order: taken back if this try succeeds, replaced if
+        # it fails again)
+        at = next(k for k, f in enumerate(report.failures) if f is failure)
         if not _others_moved(ctx, name, then):  # the same world: the same failure
             ctx.note(f"not trying {name} again: nothing has moved since it failed")
-            report.failures.append(failure)
             continue
         ctx.note(f"trying {name} again (other items moved since it failed)")
         here = robot_position(ctx)
@@ -144,10 +146,11 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
             TransportAction(ObjectDesignatorDescription(names=[name]),
                             **goals[name]).perform(ctx)
             ctx.note(f"{name}: done at the second try")
-        except PlanFailure as failure:
-            ctx.note(f"failed again: {failure}")
-            report.failures.append(failure)
+        except PlanFailure as second:
+            ctx.note(f"failed again: {second}")
+            report.failures[at] = second
             continue
+        del report.failures[at]
         report.trips.append([name])
         report.add_trip(here[:2], [position], [ctx.scene.object_pose(name)[0][:2]])
     for step in [*(CloseAction(name) for name in list(ctx.opened)), ParkArmsAction()]:
@@ -161,14 +164,13 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
 
 def _failed(ctx: RobotContext, name: str, failure: PlanFailure, report: PlanReport,
             again: list[tuple[str, PlanFailure, dict]], then: dict | None = None) -> None:
-    """A transport failed: reported, or, if it may be tried again, kept for the end, with
-    where the items stood `then` (by default now; a trip carrying two: when it began,
-    as the item delivered before this one may be what was in its way)."""
+    """A transport failed: reported (in fetch order), and, if it may be tried again, kept
+    for the end, with where the items stood `then` (by default now; a trip carrying two:
+    when it began, as the item delivered before this one may be what was in its way)."""
     ctx.note(f"failed: {failure}")
+    report.failures.append(failure)
     if can_try_again(ctx, name):
         again.append((name, failure, then if then is not None else _positions(ctx)))
-    else:
-        report.failures.append(failure)
 
 
 def _positions(ctx: RobotContext) -> dict[str, tuple[float, float, float]]:

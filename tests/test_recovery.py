@@ -200,3 +200,30 @@ def test_an_item_of_a_trip_carrying_two_is_tried_again_when_the_other_was_in_its
     assert "trying milk again (other items moved since it failed)" in result.log
     assert result.order.count("milk") == 1
     assert result.trips[-2:] == [["breakfast-cereal", "milk"], ["milk"]], result.trips
+
+
+def test_failures_are_reported_in_fetch_order(monkeypatch) -> None:
+    """An item that fails where it stands is tried again at the end, yet its failure
+    keeps its place in fetch order: the milk (fetched first, tried again, failing again)
+    is reported before the cup (fetched second, not tried again). The two failures are
+    made here: what is tested is the plan's bookkeeping."""
+    import importlib
+
+    set_table = importlib.import_module("cramlite.plans.set_table")
+    from cramlite.designators import ObjectUnreachable
+
+    class Failing(TransportAction):
+        def execute(self, ctx):
+            name = self.object.names[0]
+            if name in ("milk", "cup"):
+                raise ObjectUnreachable("made to fail here", obj=name)
+            return super().execute(ctx)
+
+    monkeypatch.setattr(set_table, "TransportAction", Failing)
+    monkeypatch.setattr(set_table, "can_try_again", lambda ctx, name: name == "milk")
+    order = ["milk", "cup", "breakfast-cereal", "bowl", "spoon"]
+    with TrialRunner("v1", backend="kinematic") as runner:
+        result = runner.run("baseline", seed=0, order=order)
+    assert "trying milk again (other items moved since it failed)" in result.log
+    assert [f["item"] for f in result.failures] == ["milk", "cup"], result.failures
+    assert "failed again: " in "\n".join(result.log)
