@@ -35,7 +35,7 @@ from cramlite.designators.grasps import Grasp, in_base_frame
 from cramlite.designators.locations import CostmapLocation, reaching_seed
 from cramlite.designators.motions import MoveArmJointsMotion, MoveGripperMotion, gripper_joints
 from cramlite.designators.tasks import ActionDesignator, recorded
-from cramlite.motion.ik import ARMS, arm_ik, arm_joint_names
+from cramlite.motion.ik import ARMS, ArmIK, IKOptions, arm_ik, arm_joint_names
 from cramlite.motion.trajectory import time_along_path, wrap_angle
 from cramlite.process_cache import ProcessCache
 from cramlite.scene.gripper import gripper_geometry
@@ -57,8 +57,17 @@ MAX_SQUINT_RAD = math.radians(60)
 FOOTPRINT_STAGES = 5
 #: Handle IK chains kept for the process, at most 20 000 (a pure function of the handle's
 #: poses, the base pose, the arm and the torso; thousands of solves for a cupboard's door).
-_HANDLE_IK: ProcessCache[tuple[list[dict[str, float]], dict, dict] | None] = \
+_HANDLE_IK: ProcessCache[tuple[list[float], list[dict[str, float]], dict, dict] | None] = \
     ProcessCache(20_000)
+#: How closely the hand follows the handle: IK on the handle's path is solved to this
+#: (the arm's IK stops at 1 mm, and the fingers closed on a 2 cm bar may be at most 2 mm
+#: inside it: a hand 1.7 mm off the bar, between two samples, put a fingertip 2.3 mm in)...
+HANDLE_IK_OPTIONS = IKOptions(position_tolerance_m=2e-4, rotation_tolerance_rad=2e-3)
+#: ...and the arm's straight joint-space way between two samples stays this close to the
+#: handle's own way (checked at a quarter, half and three quarters of it); where it does
+#: not, a sample is solved half way, at most `HANDLE_REFINEMENTS` times over.
+HANDLE_TRACKING_M = 5e-4
+HANDLE_REFINEMENTS = 4
 
 
 @dataclass(frozen=True)
@@ -208,8 +217,8 @@ class AccessingLocation:
         if solved is None:
             self.rejected["ik"] += 1
             return None
-        chain, pre, post = solved
-        states, values, arc = _densify(ctx, names, chain, path)
+        at, chain, pre, post = solved
+        states, values, arc = _densify(ctx, names, at, chain, path)
         if not self._free(ctx, base, arm, names, states, values, pre, post):
             self.rejected["arm collision"] += 1
             return None
@@ -217,7 +226,8 @@ class AccessingLocation:
                           post)
 
     def _solve(self, ctx: RobotContext, base: BasePose, arm: str, torso: float,
-               path: HandlePath) -> tuple[list[dict[str, float]], dict, dict] | None:
+               path: HandlePath,
+               ) -> tuple[list[float], list[dict[str, float]], dict, dict] | None:
         """IK along the handle path (each sample from the previous one), and for the
         pre-grasp and the retreat: a pure function of the container, the stretch, the base
         pose, the arm and the torso (its starts are drawn from a generator seeded by them),
@@ -265,11 +275,20 @@ class AccessingLocation:
                 ", ".join(f"{n} {why[k]}" for k, n in self.rejected.items() if n))
 
 
+@functools.cache
+def handle_ik(arm: str) -> ArmIK:
+    """The arm's IK solver for following a handle (`HANDLE_IK_OPTIONS`), once a process."""
+    return ArmIK(arm, options=HANDLE_IK_OPTIONS)
+
+
 def _handle_ik(arm: str, base: BasePose, torso: float, path: HandlePath,
-               rng: np.random.Generator) -> tuple[list[dict[str, float]], dict, dict] | None:
+               rng: np.random.Generator,
+               ) -> tuple[list[float], list[dict[str, float]], dict, dict] | None:
     """The arm's states along the handle path, from the first start (reaching forward,
-    tucked, random) whose solution can be followed all the way."""
-    ik = arm_ik(arm)
+    tucked, random) whose solution can be followed all the way: where on the path each
+    is (an index into its poses, fractional for the samples added in between, see
+    `_followed_closely`), the states, the pre-grasp and the retreat."""
+    ik, close = arm_ik(arm), handle_ik(arm)
     ends = [in_base_frame(path.poses[0], base), in_base_frame(path.poses[-1], base)]
     clear = [in_base_frame(backed_off(path.poses[0], HANDLE_CLEARANCE_M), base),
              in_base_frame(backed_off(path.poses[-1], HANDLE_CLEARANCE_M), base)]
@@ -278,8 +297,8 @@ def _handle_ik(arm: str, base: BasePose, torso: float, path: HandlePath,
                     near_limits_ok=True) is None for end in ends):
         return None
     for start in (reaching_seed(arm), {**PARK_JOINTS[arm], TORSO_JOINT: torso}, None):
-        first = ik.solve(ends[0], rng, start, fixed_torso_m=torso,
-                         restarts=0 if start else 2)
+        first = close.solve(ends[0], rng, start, fixed_torso_m=torso,
+                            restarts=0 if start else 2)
         if first is None:
             continue
         # the pre-grasp before the path: from here it fails more often than the path does
@@ -288,16 +307,74 @@ def _handle_ik(arm: str, base: BasePose, torso: float, path: HandlePath,
             continue
         chain = [first.joints]
         for pose in path.poses[1:]:
-            solution = ik.solve(in_base_frame(pose, base), rng, chain[-1],
-                                fixed_torso_m=torso, restarts=0)
+            solution = close.solve(in_base_frame(pose, base), rng, chain[-1],
+                                   fixed_torso_m=torso, restarts=0)
             if solution is None:
                 break
             chain.append(solution.joints)
         else:
             post = ik.solve(clear[1], rng, chain[-1], fixed_torso_m=torso, restarts=1)
-            if post is not None:
-                return chain, pre.joints, post.joints
+            if post is None:
+                continue
+            followed = _followed_closely(close, torso, base, path, chain, rng)
+            if followed is not None:
+                return (*followed, pre.joints, post.joints)
     return None
+
+
+def _followed_closely(ik: ArmIK, torso: float, base: BasePose, path: HandlePath,
+                      chain: list[dict[str, float]], rng: np.random.Generator,
+                      ) -> tuple[list[float], list[dict[str, float]]] | None:
+    """The chain (one state per pose of the path) with states added between two where
+    the arm's straight joint-space way between them strays from the handle's way by more
+    than `HANDLE_TRACKING_M`: solved half way along the handle (its pose in between by
+    the screw motion from one to the other, exact for a door's arc and a drawer's line),
+    from the joints half way. Returns where on the path each state is (fractional
+    indices) and the states; None if the hand still strays after `HANDLE_REFINEMENTS`
+    halvings (this base pose cannot follow the handle closely enough). (A solve from
+    given joints draws no random number.)"""
+    poses = [in_base_frame(pose, base) for pose in path.poses]
+
+    def strays(a: dict[str, float], b: dict[str, float], pa: pin.SE3, pb: pin.SE3,
+               ) -> bool:
+        for f in (0.25, 0.5, 0.75):
+            joints = ik.between(a, b, f)
+            target = pin.SE3.Interpolate(pa, pb, f)
+            if np.linalg.norm(ik.forward(joints).translation - target.translation) > \
+                    HANDLE_TRACKING_M:
+                return True
+        return False
+
+    def fill(ia: float, a: dict, pa: pin.SE3, ib: float, b: dict, pb: pin.SE3,
+             depth: int) -> list[tuple[float, dict]] | None:
+        if not strays(a, b, pa, pb):
+            return []
+        if depth == 0:
+            return None
+        middle = pin.SE3.Interpolate(pa, pb, 0.5)
+        solution = ik.solve(middle, rng, ik.between(a, b, 0.5), fixed_torso_m=torso,
+                            restarts=0)
+        if solution is None:
+            return None
+        im = (ia + ib) / 2
+        before = fill(ia, a, pa, im, solution.joints, middle, depth - 1)
+        after = fill(im, solution.joints, middle, ib, b, pb, depth - 1)
+        if before is None or after is None:
+            return None
+        return [*before, (im, solution.joints), *after]
+
+    at, out = [0.0], [chain[0]]
+    for i in range(1, len(chain)):
+        added = fill(i - 1, chain[i - 1], poses[i - 1], i, chain[i], poses[i],
+                     HANDLE_REFINEMENTS)
+        if added is None:
+            return None
+        for position, joints in added:
+            at.append(position)
+            out.append(joints)
+        at.append(float(i))
+        out.append(chain[i])
+    return at, out
 
 
 def _footprint_free(ctx: RobotContext, occupancy, base: BasePose) -> bool:
@@ -310,14 +387,17 @@ def _footprint_free(ctx: RobotContext, occupancy, base: BasePose) -> bool:
         checker.occupancy = saved
 
 
-def _densify(ctx: RobotContext, names: tuple[str, ...], chain: list[dict[str, float]],
-             path: HandlePath) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The IK chain with states inserted where a joint would jump more than the allowed
-    step (the container's value and the handle's travel interpolated with them)."""
+def _densify(ctx: RobotContext, names: tuple[str, ...], at: list[float],
+             chain: list[dict[str, float]], path: HandlePath,
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The IK chain (each state at its place `at` on the path: a fractional index into
+    its poses) with states inserted where a joint would jump more than the allowed step
+    (the container's value and the handle's travel interpolated with them)."""
     limits = ctx.limits
     steps = limits.max_steps(names)
+    index = np.arange(len(path.values))
     states = [np.array([chain[0][n] for n in names])]
-    values, arc = [path.values[0]], [path.arc_m[0]]
+    places = [at[0]]
     for i in range(1, len(chain)):
         a = states[-1]
         b = limits.unwrap_goal(names, a, np.array([chain[i][n] for n in names]))
@@ -325,9 +405,9 @@ def _densify(ctx: RobotContext, names: tuple[str, ...], chain: list[dict[str, fl
         for k in range(1, count + 1):
             f = k / count
             states.append(a + f * (b - a))
-            values.append(path.values[i - 1] + f * (path.values[i] - path.values[i - 1]))
-            arc.append(path.arc_m[i - 1] + f * (path.arc_m[i] - path.arc_m[i - 1]))
-    return np.array(states), np.array(values), np.array(arc)
+            places.append(at[i - 1] + f * (at[i] - at[i - 1]))
+    return (np.array(states), np.interp(places, index, path.values),
+            np.interp(places, index, path.arc_m))
 
 
 @dataclass(frozen=True)

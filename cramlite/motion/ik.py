@@ -198,9 +198,21 @@ class ArmIK:
                 pin.neutral(self.model))
 
     def forward(self, joints: dict[str, float]) -> pin.SE3:
-        q = self.to_q(joints)
-        pin.framesForwardKinematics(self.model, self.data, q)
-        return self.data.oMf[self.frame_id].copy()
+        """The tool frame's pose (base frame) at these joints."""
+        pin.forwardKinematics(self.model, self.data, self.to_q(joints))
+        return pin.updateFramePlacement(self.model, self.data, self.frame_id).copy()
+
+    def between(self, a: dict[str, float], b: dict[str, float], f: float,
+                ) -> dict[str, float]:
+        """The joints a fraction `f` of the straight way from `a` to `b` (a continuous
+        joint the short way round)."""
+        out = {}
+        for name, cont in zip(self.joint_names, self._continuous, strict=True):
+            start, step = a[name], b[name] - a[name]
+            if cont:
+                step = math.remainder(step, 2 * math.pi)
+            out[name] = start + f * step
+        return out
 
     # -- solving -----------------------------------------------------------------------
     def solve(self, target: pin.SE3, rng: np.random.Generator,
