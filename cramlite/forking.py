@@ -11,10 +11,15 @@ elsewhere, spawn.
 from __future__ import annotations
 
 import contextlib
+import os
 import sys
 import threading
+import time
 import warnings
 from collections.abc import Iterator
+
+#: How often a worker checks that the process that started it is still alive.
+PARENT_CHECK_S = 1.0
 
 
 def fork_is_safe() -> bool:
@@ -31,3 +36,16 @@ def quiet_fork() -> Iterator[None]:
         warnings.filterwarnings("ignore", message=".*use of fork\\(\\) may lead to deadlocks",
                                 category=DeprecationWarning)
         yield
+
+
+def exit_with_parent(parent_pid: int) -> None:
+    """In a worker process: exit (at once, as a killed parent cannot wait for it) within
+    `PARENT_CHECK_S` of the process that started it going away, however it went (a
+    SIGKILL leaves no chance to stop its workers)."""
+    def watch() -> None:
+        while True:
+            time.sleep(PARENT_CHECK_S)
+            if os.getppid() != parent_pid:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="cramlite-parent-watch", daemon=True).start()

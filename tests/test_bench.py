@@ -248,6 +248,52 @@ def test_a_second_bench_into_the_same_folder_is_refused_naming_the_first(
     assert after.returncode == 0, after.stderr  # the lock went with its holder
 
 
+def test_a_process_forked_from_the_holder_does_not_keep_the_folder_locked(
+        tmp_path: Path) -> None:
+    """The bench's workers are forked from it: they must not keep its lock once it is
+    gone (a killed bench's folder stayed locked while a worker was busy)."""
+    import multiprocessing
+
+    from cramlite.bench.lock import FolderBusy, FolderLock
+    from cramlite.forking import quiet_fork
+
+    holder = FolderLock(tmp_path)
+    holder.acquire()
+    child = multiprocessing.get_context("fork").Process(target=time.sleep, args=(60,))
+    with quiet_fork():
+        child.start()
+    try:
+        with pytest.raises(FolderBusy):
+            FolderLock(tmp_path).acquire()  # (the holder still has it)
+        holder.release()
+        after = FolderLock(tmp_path)
+        after.acquire()  # the child, still running, does not hold it
+        after.release()
+    finally:
+        child.kill()
+        child.join()
+
+
+def test_the_progress_bar_on_a_terminal_starts_no_thread() -> None:
+    """tqdm's monitor thread would keep a bench on a terminal from forking its workers
+    (a fresh interpreter: this one may have made a bar already)."""
+    code = """
+import io, threading
+from cramlite.bench.progress import Progress
+class Terminal(io.StringIO):
+    def isatty(self):
+        return True
+before = threading.active_count()
+progress = Progress(10, stream=Terminal())
+progress.update({"success": True})
+print(progress._bar is not None, threading.active_count() - before)
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=ROOT, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["True", "0"]
+
+
 def test_resume_is_keyed_by_setup_content_and_plan(tmp_path: Path) -> None:
     out = tmp_path / "s"
     args = ["--strategies", "baseline", "--trials", "1", "--no-plots", "--workers", "1"]

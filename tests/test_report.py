@@ -8,6 +8,7 @@ import csv
 import html.parser
 import json
 import math
+import os
 import shutil
 import subprocess
 import sys
@@ -378,6 +379,49 @@ print(results[-1], len({pid for pid in results[:-1]}), os.getpid() in results)
         last, pids, here = done.stdout.split()
         assert last == "7"  # (in its job's place)
         assert (int(pids) > 1 and here == "False") if many else (pids, here) == ("1", "True")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux") or (os.cpu_count() or 1) < 2,
+                    reason="pictures are drawn on forked processes on Linux with 2+ CPUs")
+def test_drawing_processes_end_with_a_killed_report(tmp_path: Path) -> None:
+    """A report killed while it draws leaves no drawing process behind (they held the
+    bench's folder lock, and lived on for ever)."""
+    import signal
+    import time
+
+    code = """
+import os, sys, time
+from pathlib import Path
+from cramlite.report.build import _draw_all
+def job(k):
+    Path(sys.argv[1], f"{os.getpid()}.pid").write_text("")
+    time.sleep(60)
+_draw_all([(job, (k,)) for k in range(2)])
+"""
+    parent = subprocess.Popen([sys.executable, "-c", code, str(tmp_path)], cwd=ROOT)
+    try:
+        deadline = time.monotonic() + 60
+        while len(list(tmp_path.glob("*.pid"))) < 2 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        children = [int(p.stem) for p in tmp_path.glob("*.pid")]
+        assert len(children) == 2
+        parent.send_signal(signal.SIGKILL)
+        parent.wait()
+        def alive(pid: int) -> bool:  # (a zombie has ended: its parent is gone)
+            try:
+                return Path(f"/proc/{pid}/stat").read_text().split(") ")[1][0] != "Z"
+            except (OSError, IndexError):
+                return False
+
+        deadline = time.monotonic() + 10
+        while any(alive(pid) for pid in children) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        left = [pid for pid in children if alive(pid)]
+        for pid in left:
+            os.kill(pid, signal.SIGKILL)
+        assert left == []
+    finally:
+        parent.kill()
 
 
 def test_pictures_drawn_at_once_are_those_drawn_one_by_one(bench_dir: Path, tmp_path) -> None:

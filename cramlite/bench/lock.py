@@ -1,8 +1,10 @@
 """One bench per results folder: an exclusive lock on OUT/.bench.lock.
 
 The lock is an OS file lock (`fcntl.flock`), so it is released when its holder exits,
-however it exits: a killed bench leaves no stale lock. The file names the holder (pid,
-host, start time, command), which a second bench reports when it is refused.
+however it exits: a killed bench leaves no stale lock. A process forked from the holder
+(a bench's workers, the report's drawing processes) closes its copy of the lock's file
+at once, so the lock goes with the holder, not with the last of them. The file names the
+holder (pid, host, start time, command), which a second bench reports when it is refused.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ import os
 import socket
 import sys
 import time
+import weakref
 from pathlib import Path
 
 try:
@@ -51,6 +54,9 @@ class FolderLock:
         os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}, since "
                      f"{time.strftime('%Y-%m-%d %H:%M:%S')}: {command}\n".encode())
         self._fd = fd
+        if hasattr(os, "register_at_fork"):
+            mine = weakref.ref(self)
+            os.register_at_fork(after_in_child=lambda: _close_in_child(mine()))
 
     def release(self) -> None:
         if self._fd is not None:
@@ -64,3 +70,12 @@ class FolderLock:
 
     def __exit__(self, *exc: object) -> None:
         self.release()
+
+
+def _close_in_child(lock: FolderLock | None) -> None:
+    """In a forked process: close its copy of the lock's file (the holder keeps the lock:
+    an flock ends only with an unlock or when every copy is closed, and this is neither
+    the unlock nor, in the holder, a close)."""
+    if lock is not None and lock._fd is not None:
+        os.close(lock._fd)
+        lock._fd = None

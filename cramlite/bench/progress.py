@@ -22,8 +22,7 @@ class Progress:
         self._next_report = 0.1
         self.silent = False
         if self.tty:
-            from tqdm import tqdm
-            self._quietly(lambda: setattr(self, "_bar", tqdm(
+            self._quietly(lambda: setattr(self, "_bar", _bar_class()(
                 total=total, desc="trials", unit="trial", file=self.stream,
                 dynamic_ncols=True)))
 
@@ -67,3 +66,14 @@ class Progress:
 
 def _truthy(value: Any) -> bool:
     return value is True or str(value) == "True"
+
+
+def _bar_class() -> type:
+    """tqdm's bar without its monitor thread (which only tunes how often a stalled bar
+    redraws): a bench that runs no other thread forks its workers (`cramlite.forking`)."""
+    from tqdm import tqdm
+
+    class Bar(tqdm):
+        monitor_interval = 0
+
+    return Bar

@@ -23,12 +23,11 @@ from typing import Any
 from cramlite.bench.specs import FIXED_ORDER, TrialSpec
 from cramlite.designators.tasks import actions_only
 from cramlite.errors import bounded_text
+from cramlite.forking import exit_with_parent
 
 _RUNNERS: dict[tuple[str, str], Any] = {}  # (setup path, hash) -> TrialRunner, per process
 _TRIAL_LOCK = threading.Lock()  # one trial at a time in this process
 _STARTED: Any = None  # local pool only: a queue that learns when each trial starts
-#: How often a local worker checks that the bench that started it is still alive.
-PARENT_CHECK_S = 1.0
 
 
 def worker_name() -> str:
@@ -44,14 +43,7 @@ def init_local_worker(started: Any, parent_pid: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     _STARTED = started
-
-    def watch_parent() -> None:
-        while True:
-            time.sleep(PARENT_CHECK_S)
-            if os.getppid() != parent_pid:
-                os._exit(1)
-
-    threading.Thread(target=watch_parent, name="cramlite-parent-watch", daemon=True).start()
+    exit_with_parent(parent_pid)
 
 
 def run_spec(spec: TrialSpec, lock_timeout_s: float = -1) -> dict[str, Any]:

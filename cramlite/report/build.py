@@ -161,7 +161,7 @@ def _draw_all(jobs: list[tuple[Callable[..., Any], tuple]],
     pictures either way. The first job that fails stops the rest and raises here."""
     import multiprocessing
 
-    from cramlite.forking import fork_is_safe, quiet_fork
+    from cramlite.forking import exit_with_parent, fork_is_safe, quiet_fork
 
     processes = min(os.cpu_count() or 1, MAX_DRAWING_PROCESSES, len(jobs))
     if processes < 2 or not fork_is_safe():
@@ -170,7 +170,9 @@ def _draw_all(jobs: list[tuple[Callable[..., Any], tuple]],
 
     if before is not None:
         before()
-    pool = ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("fork"))
+    # (a drawing process ends with this one, even killed: none is left behind)
+    pool = ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("fork"),
+                               initializer=exit_with_parent, initargs=(os.getpid(),))
     try:
         with quiet_fork():
             futures = [pool.submit(function, *arguments) for function, arguments in jobs]
