@@ -296,6 +296,7 @@ def _handle_ik(arm: str, base: BasePose, torso: float, path: HandlePath,
     if any(ik.solve(end, rng, reaching_seed(arm), fixed_torso_m=torso, restarts=4,
                     near_limits_ok=True) is None for end in ends):
         return None
+    poses = [in_base_frame(pose, base) for pose in path.poses]
     for start in (reaching_seed(arm), {**PARK_JOINTS[arm], TORSO_JOINT: torso}, None):
         first = close.solve(ends[0], rng, start, fixed_torso_m=torso,
                             restarts=0 if start else 2)
@@ -306,9 +307,8 @@ def _handle_ik(arm: str, base: BasePose, torso: float, path: HandlePath,
         if pre is None:
             continue
         chain = [first.joints]
-        for pose in path.poses[1:]:
-            solution = close.solve(in_base_frame(pose, base), rng, chain[-1],
-                                   fixed_torso_m=torso, restarts=0)
+        for pose in poses[1:]:
+            solution = close.solve(pose, rng, chain[-1], fixed_torso_m=torso, restarts=0)
             if solution is None:
                 break
             chain.append(solution.joints)
@@ -316,16 +316,17 @@ def _handle_ik(arm: str, base: BasePose, torso: float, path: HandlePath,
             post = ik.solve(clear[1], rng, chain[-1], fixed_torso_m=torso, restarts=1)
             if post is None:
                 continue
-            followed = _followed_closely(close, torso, base, path, chain, rng)
+            followed = _followed_closely(close, torso, poses, chain, rng)
             if followed is not None:
                 return (*followed, pre.joints, post.joints)
     return None
 
 
-def _followed_closely(ik: ArmIK, torso: float, base: BasePose, path: HandlePath,
+def _followed_closely(ik: ArmIK, torso: float, poses: list[pin.SE3],
                       chain: list[dict[str, float]], rng: np.random.Generator,
                       ) -> tuple[list[float], list[dict[str, float]]] | None:
-    """The chain (one state per pose of the path) with states added between two where
+    """The chain (one state per pose of the handle's path, `poses`: in the base's frame)
+    with states added between two where
     the arm's straight joint-space way between them strays from the handle's way by more
     than `HANDLE_TRACKING_M`: solved half way along the handle (its pose in between by
     the screw motion from one to the other, exact for a door's arc and a drawer's line),
@@ -333,7 +334,6 @@ def _followed_closely(ik: ArmIK, torso: float, base: BasePose, path: HandlePath,
     indices) and the states; None if the hand still strays after `HANDLE_REFINEMENTS`
     halvings (this base pose cannot follow the handle closely enough). (A solve from
     given joints draws no random number.)"""
-    poses = [in_base_frame(pose, base) for pose in path.poses]
 
     def strays(a: dict[str, float], b: dict[str, float], pa: pin.SE3, pb: pin.SE3,
                ) -> bool:

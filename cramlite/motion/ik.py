@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from cramlite.motion.trajectory import wrap_angle
 from cramlite.process_cache import ProcessCache
 from cramlite.scene.models import pr2_model
 from cramlite.world.pr2 import TORSO_JOINT
@@ -205,13 +206,11 @@ class ArmIK:
     def between(self, a: dict[str, float], b: dict[str, float], f: float,
                 ) -> dict[str, float]:
         """The joints a fraction `f` of the straight way from `a` to `b` (a continuous
-        joint the short way round)."""
+        joint the short way round, as `JointLimits.unwrap_goal` turns it)."""
         out = {}
         for name, cont in zip(self.joint_names, self._continuous, strict=True):
             start, step = a[name], b[name] - a[name]
-            if cont:
-                step = math.remainder(step, 2 * math.pi)
-            out[name] = start + f * step
+            out[name] = start + f * (wrap_angle(step) if cont else step)
         return out
 
     # -- solving -----------------------------------------------------------------------
