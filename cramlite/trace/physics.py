@@ -282,7 +282,7 @@ def _supports(trace: Trace, checker: TraceChecker):
     for body in (b for bodies in checker.item_bodies.values() for b in bodies):
         points[id(body)] = body.points_within(*everywhere, True)
     for i, state in enumerate(trace.states):
-        kitchen = None
+        kitchen = resting = None
         for name, pose in state["objects"].items():
             if name in state["held"] or name not in checker.item_bodies:
                 last.pop(name, None)
@@ -293,11 +293,16 @@ def _supports(trace: Trace, checker: TraceChecker):
             if last.get(name) == key:
                 continue
             last[name] = key
-            if kitchen is None:
+            if kitchen is None:  # (once a state, for every item checked in it)
                 frames = checker.kitchen_frames(state)
                 kitchen = _Boxed([(body, frames[body.owner] @ body.shape.in_link)
                                   for body in checker.kitchen_bodies])
-            gap = _gap_below(checker, name, state, kitchen, points)
+                resting = _Boxed([(body, object_frame(state["objects"][other]) @
+                                   body.shape.in_link)
+                                  for other, bodies in checker.item_bodies.items()
+                                  if other in state["objects"] and other not in state["held"]
+                                  for body in bodies])
+            gap = _gap_below(checker, name, state, kitchen, resting, points)
             if gap > SUPPORT_GAP_M:
                 yield Finding("support", f"{name} rests on nothing", round(gap * 100, 1),
                               SUPPORT_GAP_M * 100, "cm", state["t"], i + 2)
@@ -319,9 +324,10 @@ class _Boxed:
 
 
 def _gap_below(checker: TraceChecker, name: str, state: dict, kitchen: _Boxed,
-               points: dict[int, np.ndarray]) -> float:
-    """How far the lowest points of an item are above what is under them (to 1 mm; 0 if
-    within `SUPPORT_GAP_M`), the floor at the latest."""
+               resting: _Boxed, points: dict[int, np.ndarray]) -> float:
+    """How far the lowest points of an item are above what is under them (the kitchen, or
+    another of the `resting` items; to 1 mm; 0 if within `SUPPORT_GAP_M`), the floor at
+    the latest."""
     frame = object_frame(state["objects"][name])
     world = []
     for body in checker.item_bodies[name]:
@@ -331,11 +337,10 @@ def _gap_below(checker: TraceChecker, name: str, state: dict, kitchen: _Boxed,
     low = float(every[:, 2].min())
     bottom = every[every[:, 2] <= low + 0.002]
     lo, hi = bottom[:, :2].min(axis=0), bottom[:, :2].max(axis=0)
-    items = _Boxed([(body, object_frame(state["objects"][other]) @ body.shape.in_link)
-                    for other, bodies in checker.item_bodies.items()
-                    if other != name and other in state["objects"]
-                    and other not in state["held"] for body in bodies])
-    others = kitchen.under(lo, hi, low) + items.under(lo, hi, low)
+    own = {id(body) for body in checker.item_bodies[name]}
+    others = kitchen.under(lo, hi, low) + [(body, where) for body, where
+                                           in resting.under(lo, hi, low)
+                                           if id(body) not in own]
 
     def meets(drop: float) -> bool:
         lowered = bottom - (0.0, 0.0, drop)
