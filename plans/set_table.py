@@ -116,8 +116,7 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
             remaining.remove(name)
         if len(batch) == 1:
             try:
-                TransportAction(ObjectDesignatorDescription(names=names),
-                                **goals[names[0]]).perform(ctx)
+                _transport_alone(ctx, names[0], goals)
             except PlanFailure as failure:
                 _failed(ctx, names[0], failure, report, again)
         else:
@@ -143,8 +142,7 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
         here = robot_position(ctx)
         position = ctx.scene.object_pose(name)[0][:2]
         try:
-            TransportAction(ObjectDesignatorDescription(names=[name]),
-                            **goals[name]).perform(ctx)
+            _transport_alone(ctx, name, goals)
             ctx.note(f"{name}: done at the second try")
         except PlanFailure as second:
             ctx.note(f"failed again: {second}")
@@ -160,6 +158,11 @@ def fetch_in_strategy_order(ctx: RobotContext, setup: Setup, strategy: Strategy,
             ctx.note(f"failed: {failure}")
             report.failures.append(failure)
     return report
+
+
+def _transport_alone(ctx: RobotContext, name: str, goals: dict[str, dict]) -> None:
+    """Fetch one item and put it where `goals` says (PlanFailure if it cannot)."""
+    TransportAction(ObjectDesignatorDescription(names=[name]), **goals[name]).perform(ctx)
 
 
 def _failed(ctx: RobotContext, name: str, failure: PlanFailure, report: PlanReport,

@@ -259,6 +259,8 @@ def test_a_process_forked_from_the_holder_does_not_keep_the_folder_locked(
 
     holder = FolderLock(tmp_path)
     holder.acquire()
+    holder.release()
+    holder.acquire()  # (taken again: it still lets go in a child)
     child = multiprocessing.get_context("fork").Process(target=time.sleep, args=(60,))
     with quiet_fork():
         child.start()

@@ -38,6 +38,7 @@ class FolderLock:
     def __init__(self, folder: Path):
         self.path = Path(folder) / LOCK_NAME
         self._fd: int | None = None
+        self._watches_forks = False
 
     def acquire(self) -> None:
         """Take the lock or raise FolderBusy naming the holder (OSError if unwritable)."""
@@ -54,9 +55,12 @@ class FolderLock:
         os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}, since "
                      f"{time.strftime('%Y-%m-%d %H:%M:%S')}: {command}\n".encode())
         self._fd = fd
-        if hasattr(os, "register_at_fork"):
+        if hasattr(os, "register_at_fork") and not self._watches_forks:
+            # (once a lock: a callback cannot be unregistered, and after a release it
+            # finds nothing to close)
             mine = weakref.ref(self)
             os.register_at_fork(after_in_child=lambda: _close_in_child(mine()))
+            self._watches_forks = True
 
     def release(self) -> None:
         if self._fd is not None:
