@@ -219,6 +219,19 @@ def test_an_upright_item_stays_upright_where_the_straight_joint_path_would_tip_i
         assert math.degrees(math.acos(max(-1.0, min(1.0, up)))) <= 15.0 + 1e-6, state["t"]
 
 
+def test_the_right_hand_puts_the_milk_in_the_cupboard_itself_when_clearing_up_c3() -> None:
+    """OMPL's search for a motion that holds an upright item extends its trees by short
+    steps (`ArmPlannerOptions.upright_range_steps`). With OMPL's default range, a fifth of
+    the joint space's extent, most extensions tip the item somewhere along them: in this
+    trial every search for a way into the cupboard spent its budget, and the right hand
+    put the milk back for the left one to carry (34 s more of the robot's time)."""
+    with TrialRunner("c3", backend="kinematic") as runner:
+        result = runner.run("opm", "clear-table", seed=1)
+    assert result.success, result.failures
+    gave_up = [line for line in result.log if "could not put" in line]
+    assert gave_up == [], gave_up
+
+
 @pytest.mark.parametrize("name", ["cup", "milk"])
 def test_fingers_close_to_the_items_width_not_through_it(name: str) -> None:
     setup = load_setup("v1")
