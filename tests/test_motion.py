@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -153,6 +155,35 @@ def test_a_slower_machine_plans_the_same_base_path(planner) -> None:
     print("slowed planning", round(spent, 2), "s")
     assert spent > 1.0  # (longer than the old budget of one second)
     assert again is not None and again.waypoints == fast.waypoints
+
+
+def test_a_base_search_between_poses_that_are_not_free_ends_at_once() -> None:
+    """Repairing a path plans again between its vertices, and rope shortcutting can put
+    one where the base does not fit. OMPL waits for a valid goal for as long as its
+    termination condition allows, and a budget of checks never ends while nothing is
+    checked: a random setup's trial ran until the bench's timeout. (In a child process,
+    which a hang would keep from answering.)"""
+    code = """
+import math
+from cramlite.motion import BaseMotionPlanner, FootprintChecker, OccupancyMap
+from cramlite.scene import PlanningScene
+from cramlite.world import load_setup
+scene = PlanningScene(load_setup("v1"))
+checker = FootprintChecker(OccupancyMap(scene.environment_footprints()))
+planner = BaseMotionPlanner(checker)
+start, blocked, goal = (-0.3, 0.1, 0.0), (1.5, 0.0, 0.0), (-1.95, 1.7, math.pi / 2)
+assert checker.is_free(*start) and checker.is_free(*goal) and not checker.is_free(*blocked)
+resolution = planner.options.check_resolution
+print(planner._repair([start, blocked, goal], 7, resolution),
+      planner._repair([blocked, goal], 7, resolution))
+"""
+    try:
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                              timeout=60)
+    except subprocess.TimeoutExpired:
+        pytest.fail("the search did not end")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["None", "None"]
 
 
 def test_footprint_respects_yaw(planner) -> None:

@@ -87,7 +87,7 @@ class BaseMotionPlanner:
         seed = int(rng.integers(1, 2**31 - 1))
         # OMPL checks its motions coarsely first; every executed waypoint is checked. If one
         # collides, the segments of the path that do are planned again with the fine
-        # resolution (their ends are free), and failing that the whole path.
+        # resolution, and failing that the whole path.
         coarse_resolution = self.options.coarse_check_resolution
         fine_resolution = self.options.check_resolution
         coarse = self._ompl(start, goal, seed, coarse_resolution)
@@ -112,8 +112,9 @@ class BaseMotionPlanner:
 
     def _repair(self, vertices: Sequence[BasePose], seed: int,
                 resolution: float) -> list[BasePose] | None:
-        """The path with each segment whose waypoints collide planned again (between its
-        free ends); None if one of them has no path."""
+        """The path with each segment whose waypoints collide planned again between its
+        ends; None if one of them has no path, or an end is not free (rope shortcutting
+        puts vertices between the states OMPL checked at the coarse resolution)."""
         out = [tuple(vertices[0])]
         for a, b in itertools.pairwise(vertices):
             if self._free_waypoints([a, b]) is not None:
@@ -127,6 +128,11 @@ class BaseMotionPlanner:
 
     def _ompl(self, start: BasePose, goal: BasePose, seed: int,
               resolution: float) -> list[BasePose] | None:
+        if not (self.checker.is_free(*start) and self.checker.is_free(*goal)):
+            # (OMPL would wait for a valid goal for as long as its termination condition
+            # allows, and a budget of checks never ends while nothing is checked: the
+            # search would never return)
+            return None
         bounds_2d = self.checker.occupancy.bounds
         space = ob.SE2StateSpace()
         bounds = ob.RealVectorBounds(2)
