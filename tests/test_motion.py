@@ -186,6 +186,43 @@ print(planner._repair([start, blocked, goal], 7, resolution),
     assert done.stdout.split() == ["None", "None"]
 
 
+def test_a_search_that_does_no_work_ends() -> None:
+    """A budget of work also ends a search that asks whether to stop again and again
+    without checking anything: OMPL waiting for a valid goal (here one that is not free,
+    with a budget that work alone would never spend). (In a child process, which a hang
+    would keep from answering.)"""
+    code = """
+from ompl import base as ob, geometric as og, util as ou
+from cramlite.motion.budget import IDLE_ASKS, CheckBudget
+ou.setLogLevel(ou.LOG_NONE)
+space = ob.RealVectorStateSpace(2)
+bounds = ob.RealVectorBounds(2)
+bounds.setLow(-1.0)
+bounds.setHigh(1.0)
+space.setBounds(bounds)
+si = ob.SpaceInformation(space)
+budget = CheckBudget(lambda state: state[0] < 0.5, 10**9)  # (the goal, x = 0.9: not free)
+si.setStateValidityChecker(budget)
+si.setup()
+start, goal = si.allocState(), si.allocState()
+start[0], start[1], goal[0], goal[1] = -0.9, 0.0, 0.9, 0.0
+problem = ob.ProblemDefinition(si)
+problem.setStartAndGoalStates(start, goal)
+planner = og.RRTConnect(si)
+planner.setProblemDefinition(problem)
+planner.setup()
+status = planner.solve(budget.condition())
+print(status.getStatus() == ob.PlannerStatus.EXACT_SOLUTION, budget.idle_asks == IDLE_ASKS)
+"""
+    try:
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                              timeout=60)
+    except subprocess.TimeoutExpired:
+        pytest.fail("the search did not end")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split()[-2:] == ["False", "True"]
+
+
 def test_footprint_respects_yaw(planner) -> None:
     _, checker = planner
     # 3 cm from the island's near edge facing it: free; turned 45 degrees the corners hit

@@ -13,12 +13,19 @@ from collections.abc import Callable
 
 from ompl import base as ob
 
+#: The search also ends once its termination condition has been asked this many times in
+#: a row with no work done in between. OMPL waits for a valid goal, asking every 10 ms, for
+#: as long as the condition allows: a goal that is not free would hold the search there
+#: for ever, while every step of a search that runs checks a state at least.
+IDLE_ASKS = 200
+
 
 class CheckBudget:
     """Wraps a validity function and counts its work: one unit a state checked, plus
     what `extra()` adds (e.g. the exact pair tests those checks made, which cost about as
     much as a state's broadphase each). `condition()` ends the planner's search once
-    `max_work` units are spent."""
+    `max_work` units are spent, or once it is asked `IDLE_ASKS` times in a row with
+    nothing done in between."""
 
     def __init__(self, valid: Callable[..., bool], max_work: int,
                  extra: Callable[[], int] | None = None):
@@ -27,6 +34,8 @@ class CheckBudget:
         self.states = 0
         self._extra = extra
         self._extra_start = extra() if extra is not None else 0
+        self._asked_at = -1  # (the work done when the condition was last asked)
+        self.idle_asks = 0
 
     def __call__(self, state) -> bool:
         self.states += 1
@@ -39,7 +48,12 @@ class CheckBudget:
         return self.states + extra
 
     def exhausted(self) -> bool:
-        return self.used >= self.max_work
+        used = self.used
+        if used == self._asked_at:
+            self.idle_asks += 1
+        else:
+            self._asked_at, self.idle_asks = used, 0
+        return used >= self.max_work or self.idle_asks >= IDLE_ASKS
 
     def condition(self) -> ob.PlannerTerminationCondition:
         """Terminate when the budget is spent (the planner also stops at a solution)."""
