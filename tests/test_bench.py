@@ -261,10 +261,13 @@ def test_a_process_forked_from_the_holder_does_not_keep_the_folder_locked(
     holder.acquire()
     holder.release()
     holder.acquire()  # (taken again: it still lets go in a child)
-    child = multiprocessing.get_context("fork").Process(target=time.sleep, args=(60,))
+    fork = multiprocessing.get_context("fork")
+    started = fork.Event()
+    child = fork.Process(target=_say_started_and_sleep, args=(started,))
     with quiet_fork():
         child.start()
     try:
+        assert started.wait(30)  # (the child's fork handlers have run by then)
         with pytest.raises(FolderBusy):
             FolderLock(tmp_path).acquire()  # (the holder still has it)
         holder.release()
@@ -274,6 +277,11 @@ def test_a_process_forked_from_the_holder_does_not_keep_the_folder_locked(
     finally:
         child.kill()
         child.join()
+
+
+def _say_started_and_sleep(started) -> None:
+    started.set()
+    time.sleep(60)
 
 
 def test_the_progress_bar_on_a_terminal_starts_no_thread() -> None:

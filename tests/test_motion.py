@@ -157,15 +157,17 @@ def test_a_slower_machine_plans_the_same_base_path(planner) -> None:
     assert again is not None and again.waypoints == fast.waypoints
 
 
-def test_a_base_search_between_poses_that_are_not_free_ends_at_once() -> None:
+def test_a_base_search_between_poses_that_are_not_free_is_not_started() -> None:
     """Repairing a path plans again between its vertices, and rope shortcutting can put
     one where the base does not fit. OMPL waits for a valid goal for as long as its
     termination condition allows, and a budget of checks never ends while nothing is
-    checked: a random setup's trial ran until the bench's timeout. (In a child process,
-    which a hang would keep from answering.)"""
+    checked: a random setup's trial ran until the bench's timeout. Such a search is not
+    started (in a child process without OMPL, which a hang would keep from answering)."""
     code = """
 import math
+import cramlite.motion.base_planner as base_planner
 from cramlite.motion import BaseMotionPlanner, FootprintChecker, OccupancyMap
+base_planner.ob = base_planner.og = None  # (OMPL asked: an AttributeError)
 from cramlite.scene import PlanningScene
 from cramlite.world import load_setup
 scene = PlanningScene(load_setup("v1"))
@@ -201,7 +203,8 @@ bounds.setLow(-1.0)
 bounds.setHigh(1.0)
 space.setBounds(bounds)
 si = ob.SpaceInformation(space)
-budget = CheckBudget(lambda state: state[0] < 0.5, 10**9)  # (the goal, x = 0.9: not free)
+budget = CheckBudget(lambda state: state[0] < 0.5, 10**9,  # (the goal, x = 0.9: not free)
+                     idle_asks=IDLE_ASKS)
 si.setStateValidityChecker(budget)
 si.setup()
 start, goal = si.allocState(), si.allocState()

@@ -29,7 +29,7 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
-from cramlite.motion.budget import CheckBudget
+from cramlite.motion.budget import IDLE_ASKS, CheckBudget
 from cramlite.motion.ik import ARMS, arm_joint_names, arm_prefix
 from cramlite.motion.trajectory import JointLimits, densify
 from cramlite.scene.collision import MotionCheck as CollisionScene
@@ -59,7 +59,7 @@ class ArmPlannerOptions:
     planner: str = "RRTConnect"
     range_steps: float = 0.0
     #: The range for a motion that moves an upright item (0: `range_steps`). Most states
-    #: tip such an item, so the default range (a fifth of the space's extent, ~50 steps)
+    #: tip such an item, so the default range (a fifth of the space's extent, 45-55 steps)
     #: mostly proposes extensions that tip it somewhere: over clearing up c3 (seeds 0-2)
     #: 2 of 18 such searches found a path within the budget, 14 of 18 with 16 steps.
     upright_range_steps: float = 16.0
@@ -86,6 +86,10 @@ def arm_waypoints() -> dict[tuple[str, ...], tuple[np.ndarray, ...]]:
 #: `_SegmentChecks` can check each motion's states as one batch (not those that ask where
 #: a motion stops being valid, e.g. the KPIECE family or TRRT: its binding never says).
 SEGMENT_PLANNERS = frozenset({"RRTConnect"})
+#: Planners whose search a budget may also end when it is asked to stop again and again
+#: with no work done (`motion.budget.IDLE_ASKS`): those that ask once a step, on the
+#: searching thread, and check something in every step.
+IDLE_CHECKED_PLANNERS = frozenset({"RRTConnect"})
 
 
 class _SegmentChecks(ob.MotionValidator):
@@ -271,7 +275,9 @@ class ArmMotionPlanner:
         def valid(state) -> bool:
             return scene.is_free([state[i] * steps[i] for i in range(n)], margin)
 
-        budget = CheckBudget(valid, self.options.max_work, lambda: scene.narrow)
+        budget = CheckBudget(valid, self.options.max_work, lambda: scene.narrow,
+                             IDLE_ASKS if self.options.planner in IDLE_CHECKED_PLANNERS
+                             else None)
         si.setStateValidityChecker(budget)
         si.setStateValidityCheckingResolution(check_every / space.getMaximumExtent())
         if self.options.planner in SEGMENT_PLANNERS:

@@ -19,7 +19,7 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
-from cramlite.motion.budget import CheckBudget
+from cramlite.motion.budget import IDLE_ASKS, CheckBudget
 from cramlite.motion.footprint import FootprintChecker
 from cramlite.motion.trajectory import MAX_BASE_STEP_M, MAX_BASE_TURN_RAD, wrap_angle
 
@@ -144,7 +144,7 @@ class BaseMotionPlanner:
         si = ob.SpaceInformation(space)
         is_free = self.checker.is_free
         budget = CheckBudget(lambda s: is_free(s.getX(), s.getY(), s.getYaw()),
-                             self.options.max_checks)
+                             self.options.max_checks, idle_asks=IDLE_ASKS)  # (RRTConnect)
         si.setStateValidityChecker(budget)
         si.setStateValidityCheckingResolution(resolution)
         si.setup()

@@ -14,9 +14,11 @@ from collections.abc import Callable
 from ompl import base as ob
 
 #: The search also ends once its termination condition has been asked this many times in
-#: a row with no work done in between. OMPL waits for a valid goal, asking every 10 ms, for
-#: as long as the condition allows: a goal that is not free would hold the search there
-#: for ever, while every step of a search that runs checks a state at least.
+#: a row with no work done in between (about a second of OMPL waiting for a valid goal,
+#: which asks about twice every 10 ms for as long as the condition allows: a goal that is
+#: not free would hold the search there for ever). Safe for a planner that asks once a
+#: step, on the thread that searches, and checks a state at least in every step (OMPL's
+#: RRTConnect); not for one that asks from another thread while it works (the PRMs).
 IDLE_ASKS = 200
 
 
@@ -24,13 +26,14 @@ class CheckBudget:
     """Wraps a validity function and counts its work: one unit a state checked, plus
     what `extra()` adds (e.g. the exact pair tests those checks made, which cost about as
     much as a state's broadphase each). `condition()` ends the planner's search once
-    `max_work` units are spent, or once it is asked `IDLE_ASKS` times in a row with
-    nothing done in between."""
+    `max_work` units are spent, or once it is asked `idle_asks` times in a row with
+    nothing done in between (None: never; see `IDLE_ASKS`)."""
 
     def __init__(self, valid: Callable[..., bool], max_work: int,
-                 extra: Callable[[], int] | None = None):
+                 extra: Callable[[], int] | None = None, idle_asks: int | None = None):
         self._valid = valid
         self.max_work = max_work
+        self.max_idle_asks = idle_asks
         self.states = 0
         self._extra = extra
         self._extra_start = extra() if extra is not None else 0
@@ -53,7 +56,8 @@ class CheckBudget:
             self.idle_asks += 1
         else:
             self._asked_at, self.idle_asks = used, 0
-        return used >= self.max_work or self.idle_asks >= IDLE_ASKS
+        return used >= self.max_work or (self.max_idle_asks is not None and
+                                          self.idle_asks >= self.max_idle_asks)
 
     def condition(self) -> ob.PlannerTerminationCondition:
         """Terminate when the budget is spent (the planner also stops at a solution)."""
