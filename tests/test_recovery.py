@@ -23,16 +23,17 @@ from cramlite.trial import TrialRunner
 from cramlite.world import load_setup
 
 
-@pytest.mark.parametrize("setup, strategy, seed, item", [("c3", "opm", 1, "milk"),
-                                                         ("c1", "baseline", 0, "cup")])
+@pytest.mark.parametrize("setup, strategy, seed, item", [("c1", "opm", 6, "cup")])
 def test_clearing_up_the_other_hand_puts_it_into_the_cupboard(
         tmp_path: Path, setup: str, strategy: str, seed: int, item: str) -> None:
     """Clearing up: the right hand takes the item from the island and can reach its
     shelf in the cupboard, but finds no way in there (it stands at the cupboard's
-    right-hand wall). Before, the trial failed on it (c3: in 8 of 10 trials): now it is
-    put back where it was, as it was picked up in reverse (in c1 a new arm solution for
-    that spot touched the island, and the cup was let go in the air), and the left hand
-    carries it in."""
+    right-hand wall). Before, the trial failed on it (c3's milk: in 8 of 10 trials): now
+    it is put back where it was, as it was picked up in reverse (in c1 a new arm solution
+    for that spot touched the island, and the cup was let go in the air), and the left
+    hand carries it in. (Since the searches holding an upright item extend their trees by
+    short steps, the right hand finds its way in with c3's milk in 60 of 60 trials, seeds
+    0-29: c1's cup still shows the recovery.)"""
     path = tmp_path / f"{setup}.jsonl"
     with TrialRunner(setup, backend="kinematic") as runner:
         result = runner.run(strategy, plan="clear-table", seed=seed, trace=path)

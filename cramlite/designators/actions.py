@@ -485,7 +485,7 @@ class TransportAction(ActionDesignator):
             try:
                 NavigateAction(reach.base).perform(ctx)
                 PlaceAction(obj, spot, reach=reach, yaw=self._yaw(target)).perform(ctx)
-                ctx.note(f"placed {obj.name} at ({spot[0]:.2f}, {spot[1]:.2f}) from "
+                ctx.note(f"placed {obj.name} at ({spot[0]:.3f}, {spot[1]:.3f}) from "
                          f"{reach.describe()}")
                 return
             except PlanFailure as failure:
