@@ -63,12 +63,6 @@ class ArmPlannerOptions:
     #: mostly proposes extensions that tip it somewhere: over clearing up c3 (seeds 0-2)
     #: 2 of 18 such searches found a path within the budget, 14 of 18 with 16 steps.
     upright_range_steps: float = 16.0
-    #: Such a search samples each joint only within this far (rad, or m for the torso) of
-    #: the box its start and goal span (0: anywhere within the limits). Short extensions
-    #: wander: without the box the paths found swung the milk down to 0.33-0.48 m on its
-    #: way to the cupboard's shelf at 1.0 m (clearing up c3, 4 of 5 seeds); with it the
-    #: milk stays above the table's height, and the robot times are shorter still.
-    upright_box: float = 0.6
     #: Before OMPL, try the paths through the arm's learned waypoints (`arm_waypoints`):
     #: on the shipped setups they find a free detour for 5 in 6 of the motions OMPL
     #: plans, in milliseconds where OMPL takes tenths of a second.
@@ -270,10 +264,6 @@ class ArmMotionPlanner:
               margin: float) -> np.ndarray | None:
         n = len(start)
         lower, upper = self._bounds(scene.joints, start, goal)
-        if scene.moves_upright_items and self.options.upright_box:
-            box = self.options.upright_box
-            lower = np.maximum(lower, np.minimum(start, goal) - box)
-            upper = np.minimum(upper, np.maximum(start, goal) + box)
         space = ob.RealVectorStateSpace(n)
         bounds = ob.RealVectorBounds(n)
         for i in range(n):  # normalised units: one unit = one allowed step of that joint
