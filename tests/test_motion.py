@@ -157,6 +157,18 @@ def test_a_slower_machine_plans_the_same_base_path(planner) -> None:
     assert again is not None and again.waypoints == fast.waypoints
 
 
+def _search_in_child(code: str) -> subprocess.CompletedProcess:
+    """Run a search's code in a child process (a search that hangs keeps it from
+    answering: the test fails after a minute instead of hanging too)."""
+    try:
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                              timeout=60)
+    except subprocess.TimeoutExpired:
+        pytest.fail("the search did not end")
+    assert done.returncode == 0, done.stderr
+    return done
+
+
 def test_a_base_search_between_poses_that_are_not_free_is_not_started() -> None:
     """Repairing a path plans again between its vertices, and rope shortcutting can put
     one where the base does not fit. OMPL waits for a valid goal for as long as its
@@ -179,12 +191,7 @@ resolution = planner.options.check_resolution
 print(planner._repair([start, blocked, goal], 7, resolution),
       planner._repair([blocked, goal], 7, resolution))
 """
-    try:
-        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                              timeout=60)
-    except subprocess.TimeoutExpired:
-        pytest.fail("the search did not end")
-    assert done.returncode == 0, done.stderr
+    done = _search_in_child(code)
     assert done.stdout.split() == ["None", "None"]
 
 
@@ -217,12 +224,7 @@ planner.setup()
 status = planner.solve(budget.condition())
 print(status.getStatus() == ob.PlannerStatus.EXACT_SOLUTION, budget.idle_asks == IDLE_ASKS)
 """
-    try:
-        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                              timeout=60)
-    except subprocess.TimeoutExpired:
-        pytest.fail("the search did not end")
-    assert done.returncode == 0, done.stderr
+    done = _search_in_child(code)
     assert done.stdout.split()[-2:] == ["False", "True"]
 
 
