@@ -23,7 +23,9 @@ from cramlite.designators import (
 from cramlite.designators.actions import grasps_of
 from cramlite.designators.grasps import CLEARANCE_M, item_grasps
 from cramlite.designators.motions import MoveArmJointsMotion
+from cramlite.motion.arm_planner import ArmPlannerOptions
 from cramlite.motion.ik import arm_ik
+from cramlite.motion.trajectory import JointLimits, time_along_path
 from cramlite.scene.gripper import gripper_geometry
 from cramlite.scene.models import item_model
 from cramlite.trace import read_trace
@@ -219,17 +221,25 @@ def test_an_upright_item_stays_upright_where_the_straight_joint_path_would_tip_i
         assert math.degrees(math.acos(max(-1.0, min(1.0, up)))) <= 15.0 + 1e-6, state["t"]
 
 
-def test_the_right_hand_puts_the_milk_in_the_cupboard_itself_when_clearing_up_c3() -> None:
+def test_the_right_hand_puts_the_milk_in_the_cupboard_itself_when_clearing_up_c3(
+        tmp_path: Path) -> None:
     """OMPL's search for a motion that holds an upright item extends its trees by short
     steps (`ArmPlannerOptions.upright_range_steps`). With OMPL's default range, a fifth of
     the joint space's extent, most extensions tip the item somewhere along them: in this
     trial every search for a way into the cupboard spent its budget, and the right hand
-    put the milk back for the left one to carry (34 s more of the robot's time)."""
+    put the milk back for the left one to carry (34 s more of the robot's time).
+    Short steps anywhere in the joint space wander, so the search keeps the milk at most
+    `upright_drop_m` below the lower end of its motion: without that floor this trial
+    swung it from the table (0.86 m) down to 0.48 m on its way to the shelf (1.0 m)."""
     with TrialRunner("c3", backend="kinematic") as runner:
-        result = runner.run("opm", "clear-table", seed=1)
+        result = runner.run("opm", "clear-table", seed=1, trace=tmp_path / "c3.jsonl")
     assert result.success, result.failures
     gave_up = [line for line in result.log if "could not put" in line]
     assert gave_up == [], gave_up
+    drop = ArmPlannerOptions().upright_drop_m
+    states = read_trace(tmp_path / "c3.jsonl").states
+    lowest = min(state["objects"]["milk"][2] for state in states)
+    assert lowest >= 0.86 - drop - 0.005, lowest
 
 
 @pytest.mark.parametrize("name", ["cup", "milk"])
@@ -288,3 +298,30 @@ def test_the_hand_stays_on_the_handle_it_follows(tmp_path: Path) -> None:
     assert max(offsets) < 1e-3, max(offsets)
     grips = [f for f in physics_findings(trace, checker) if f.kind == "grip"]
     assert grips == [], [f.describe() for f in grips]
+
+
+def test_a_segment_that_turns_the_joints_in_place_slows_only_itself() -> None:
+    """A path timed along its tool's travel (a handle pulled, the tool moved straight):
+    where the joints turn while the tool hardly moves (the arm changing its configuration
+    at the end of an upright path), that segment takes its joints' time; the rest of the
+    path still moves at the tool's speed. (Slowing the whole path for one such segment
+    once stretched a placing of c3's milk to 270 s.)"""
+    names = ("a", "b")
+    limits = JointLimits({n: -10.0 for n in names}, {n: 10.0 for n in names},
+                         {"a": 1.0, "b": 2.0}, {"a": 4.0, "b": 8.0}, frozenset(), frozenset())
+    states = np.zeros((41, 2))
+    states[1:, 0] = np.arange(1, 41) * 0.01  # joint a follows the tool, 1 cm a step
+    states[21:, 1] = 0.5  # joint b turns 0.5 rad in one segment, the tool 1 um
+    arc = np.concatenate([[0.0], np.cumsum([1e-6 if k == 20 else 0.01 for k in range(40)])])
+    timed = time_along_path(names, states, arc, limits, speed_m_s=0.2, accel_m_s2=0.5)
+    dt = np.diff(timed.times)
+    assert np.all(dt > 0)
+    joint_speed = np.abs(np.diff(states, axis=0)) / dt[:, None]
+    assert np.all(joint_speed <= np.array([1.0, 2.0]) * (1 + 1e-9))  # (the URDF's limits)
+    assert np.all(np.diff(arc) / dt <= 0.2 * (1 + 1e-9))  # (the tool's speed)
+    assert dt[20] == pytest.approx(0.5 / 2.0)  # (b at its limit)
+    cruising = [k for k in range(40) if k != 20 and timed.times[k] > 0.2 / 0.5 and
+                timed.times[k + 1] < timed.times[-1] - 0.2 / 0.5]
+    assert len(cruising) > 10
+    assert np.allclose(dt[cruising], 0.01 / 0.2)  # (the tool at full speed elsewhere)
+    assert timed.times[-1] < 0.39 / 0.2 + 0.2 / 0.5 + 0.25 + 1e-6

@@ -63,6 +63,11 @@ class ArmPlannerOptions:
     #: mostly proposes extensions that tip it somewhere: over clearing up c3 (seeds 0-2)
     #: 2 of 18 such searches found a path within the budget, 14 of 18 with 16 steps.
     upright_range_steps: float = 16.0
+    #: A sampled path may take an upright held item at most this far below the lower of
+    #: its two ends (None: anywhere). Short steps anywhere in the joint space wander:
+    #: without a floor, the paths into c3's cupboard swung the milk from the table's
+    #: height down to 0.33-0.48 m on its way to a shelf at 1.0 m.
+    upright_drop_m: float | None = 0.15
     #: Before OMPL, try the paths through the arm's learned waypoints (`arm_waypoints`):
     #: on the shipped setups they find a free detour for 5 in 6 of the motions OMPL
     #: plans, in milliseconds where OMPL takes tenths of a second.
@@ -202,18 +207,27 @@ class ArmMotionPlanner:
         # first search that spent its budget finding no path is not repeated finely: with
         # four times the checks per motion the same budget explores a quarter as far (over
         # c1-c3 none of those second searches found a path; each spent 1.6-1.7 s).
-        for every, margin in ((self.options.check_every_steps, PLANNING_MARGIN_M), (1.0, 0.0)):
-            if margin and not (scene.is_free(start, margin) and scene.is_free(goal, margin)):
-                continue
-            vertices = self._ompl(scene, start, goal, steps, seed, every, margin)
-            if vertices is None:
-                if margin:
-                    return None
-                continue
-            dense, _ = densify(vertices, steps)
-            if self.states_free(scene, dense[1:]):
-                return JointPath(names, vertices, True, scene.checks - before)
-        return None
+        drop = self.options.upright_drop_m
+        if drop is not None and scene.moves_upright_items:
+            scene.upright_floors = scene.upright_heights(np.vstack([start, goal])).min(
+                axis=0) - drop
+        try:
+            for every, margin in ((self.options.check_every_steps, PLANNING_MARGIN_M),
+                                  (1.0, 0.0)):
+                if margin and not (scene.is_free(start, margin) and
+                                   scene.is_free(goal, margin)):
+                    continue
+                vertices = self._ompl(scene, start, goal, steps, seed, every, margin)
+                if vertices is None:
+                    if margin:
+                        return None
+                    continue
+                dense, _ = densify(vertices, steps)
+                if self.states_free(scene, dense[1:]):
+                    return JointPath(names, vertices, True, scene.checks - before)
+            return None
+        finally:
+            scene.upright_floors = None
 
     def _via_waypoint(self, scene: CollisionScene, names: tuple[str, ...], start: np.ndarray,
                       goal: np.ndarray, steps: np.ndarray,

@@ -536,6 +536,13 @@ class MotionCheck:
         #: the tool frames of those items' grippers, in `_upright`'s order, and a copy of
         #: the configuration for asking their tilt (`_tips`)
         self._upright_links = tuple(layout.links[row] for row, *_ in self._upright)
+        #: each of those items' origin in its tool frame, and the lowest its origin may go
+        #: (None: no floor; the arm planner sets one for its sampled searches, so that a
+        #: path does not swing the item far below both its ends)
+        self._upright_origins = np.array([np.asarray(h.relative)[:3, 3] for h in held
+                                          if scene.items[h.name].model.kind.upright
+                                          and tool_frame(h.arm) in layout.links])
+        self.upright_floors: np.ndarray | None = None
         self._scratch_q = self._q.copy()
         self._world_joints = dict(scene.belief.world_joints)
         self._place_obstacles()
@@ -889,7 +896,21 @@ class MotionCheck:
         kept = np.ones(len(frames), dtype=bool)
         for row, axis, cos_limit, _ in self._upright:
             kept &= frames[:, row, 2, :3] @ axis >= cos_limit
+        if self.upright_floors is not None:
+            kept &= (self._heights(frames) >= self.upright_floors).all(axis=1)
         return kept
+
+    def upright_heights(self, states: np.ndarray) -> np.ndarray:
+        """The height of each upright held item's origin (S x U, `_upright`'s order) at
+        each state (rows of joint vectors)."""
+        states = np.asarray(states, dtype=float).reshape(-1, len(self.joints))
+        return self._heights(self._link_frames(states))
+
+    def _heights(self, frames: np.ndarray) -> np.ndarray:
+        rows = [row for row, *_ in self._upright]
+        tools = frames[:, rows]  # (S x U x 4 x 4)
+        return np.einsum("suj,uj->su", tools[:, :, 2, :3], self._upright_origins) + \
+            tools[:, :, 2, 3]
 
     def tilts(self, q: Sequence[float]) -> list[tuple[str, float]]:
         """(item, tilt in degrees) of every upright held item tilted beyond its limit at
