@@ -63,11 +63,17 @@ class ArmPlannerOptions:
     #: mostly proposes extensions that tip it somewhere: over clearing up c3 (seeds 0-2)
     #: 2 of 18 such searches found a path within the budget, 14 of 18 with 16 steps.
     upright_range_steps: float = 16.0
-    #: A sampled path may take an upright held item at most this far below the lower of
-    #: its two ends (None: anywhere). Short steps anywhere in the joint space wander:
-    #: without a floor, the paths into c3's cupboard swung the milk from the table's
-    #: height down to 0.33-0.48 m on its way to a shelf at 1.0 m.
+    #: OMPL's path may take an upright held item at most this far below the lower of its
+    #: two ends (None: anywhere; the straight path and the learned waypoints' detours are
+    #: not held to it). Short steps anywhere in the joint space wander: without a floor,
+    #: the paths into c3's cupboard swung the milk from the table's height down to
+    #: 0.33-0.48 m on its way to a shelf at 1.0 m.
     upright_drop_m: float | None = 0.15
+
+    def __post_init__(self) -> None:
+        if self.upright_drop_m is not None and not self.upright_drop_m >= 0:
+            raise ValueError(f"ArmPlannerOptions.upright_drop_m: expected a distance >= 0 "
+                             f"(or None), got {self.upright_drop_m!r}")
     #: Before OMPL, try the paths through the arm's learned waypoints (`arm_waypoints`):
     #: on the shipped setups they find a free detour for 5 in 6 of the motions OMPL
     #: plans, in milliseconds where OMPL takes tenths of a second.
@@ -207,7 +213,7 @@ class ArmMotionPlanner:
         # first search that spent its budget finding no path is not repeated finely: with
         # four times the checks per motion the same budget explores a quarter as far (over
         # c1-c3 none of those second searches found a path; each spent 1.6-1.7 s).
-        drop = self.options.upright_drop_m
+        drop, floors = self.options.upright_drop_m, scene.upright_floors
         if drop is not None and scene.moves_upright_items:
             scene.upright_floors = scene.upright_heights(np.vstack([start, goal])).min(
                 axis=0) - drop
@@ -227,7 +233,7 @@ class ArmMotionPlanner:
                     return JointPath(names, vertices, True, scene.checks - before)
             return None
         finally:
-            scene.upright_floors = None
+            scene.upright_floors = floors
 
     def _via_waypoint(self, scene: CollisionScene, names: tuple[str, ...], start: np.ndarray,
                       goal: np.ndarray, steps: np.ndarray,

@@ -175,39 +175,50 @@ def time_along_path(names: Sequence[str], states: np.ndarray, arc_m: np.ndarray,
                     limits: JointLimits, speed_m_s: float, accel_m_s2: float,
                     world: dict[str, np.ndarray] | None = None) -> JointTrajectory:
     """Time a dense path that follows a curve (the arm pulling a handle, the tool moving
-    straight): one trapezoidal profile, at most `speed_m_s` and `accel_m_s2` along the
-    curve's length `arc_m` (per state, from 0), over each segment's nominal time: the
-    longer of its length at that speed and its joints' largest change at their velocity
-    limits. A segment where a joint limits the speed is so slowed down alone, not the
-    whole path (a segment that turns the joints while the tool hardly moves once slowed a
-    whole placing to 0.1 mm/s: 270 s of the robot's time). The states are close together
-    (a few centimetres of the curve), so the turns between them are small and the robot
-    does not stop at each."""
+    straight): along the curve's length `arc_m` (per state, from 0, never decreasing) the
+    tool moves from rest to rest at most at `speed_m_s`, speeding up and slowing down at
+    most at `accel_m_s2`, and on each segment at most as fast as keeps every joint within
+    its velocity limit. A segment where a joint limits the speed slows down the tool there
+    alone, not the whole path (slowing the whole path once stretched a placing of c3's milk
+    to 0.1 mm/s: 270 s of the robot's time); a segment where the joints turn while the tool
+    does not move takes its joints' time, the tool at rest. The states are close together
+    (a few centimetres of the curve), so the turns between them are small."""
     names = tuple(names)
     states = np.asarray(states, dtype=float)
     arc = np.asarray(arc_m, dtype=float)
+    if len(arc) != len(states) or not np.all(np.isfinite(arc)) or np.any(np.diff(arc) < 0):
+        raise ValueError("time_along_path: arc_m needs one finite, non-decreasing length "
+                         "per state")
     velocity = np.array([limits.velocity[n] for n in names])
     if len(states) < 2:
         return JointTrajectory(names, states, np.zeros(len(states)), world or {})
-    nominal = np.maximum(np.diff(arc) / speed_m_s,
-                         (np.abs(np.diff(states, axis=0)) / velocity).max(axis=1))
-    progress = np.concatenate([[0.0], np.cumsum(nominal)])  # (seconds at full speed)
-    length = float(progress[-1])
-    if length <= 0:
-        return JointTrajectory(names, states, np.zeros(len(states)), world or {})
-    accel = accel_m_s2 / speed_m_s  # (the rate of progress, 1 at full speed, per second)
-    ramp = min(1.0 / accel, math.sqrt(length / accel))  # time to top speed
-    top = accel * ramp
-    ramp_len = 0.5 * accel * ramp ** 2
-    cruise = (length - 2 * ramp_len) / top
-
-    def time_at(s: float) -> float:
-        if s <= ramp_len:
-            return math.sqrt(2 * s / accel)
-        if s <= length - ramp_len:
-            return ramp + (s - ramp_len) / top
-        rest = max(0.0, length - s)
-        return 2 * ramp + cruise - math.sqrt(2 * rest / accel)
-
-    times = np.maximum.accumulate(np.array([time_at(float(s)) for s in progress]))
+    ds = np.diff(arc)
+    joints_s = (np.abs(np.diff(states, axis=0)) / velocity).max(axis=1)  # (at their limits)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cap = np.minimum(speed_m_s, np.where(joints_s > 0, ds / joints_s, np.inf))
+    # the tool's speed at each state: within the caps of the segments on either side,
+    # from rest to rest, changing at most at the acceleration
+    v = np.zeros(len(arc))
+    v[1:-1] = np.minimum(cap[:-1], cap[1:])
+    reach = 2 * accel_m_s2 * ds
+    speeds = v.tolist()
+    for k in range(len(ds)):
+        speeds[k + 1] = min(speeds[k + 1], math.sqrt(speeds[k] ** 2 + reach[k]))
+    for k in range(len(ds) - 1, -1, -1):
+        speeds[k] = min(speeds[k], math.sqrt(speeds[k + 1] ** 2 + reach[k]))
+    dt = np.array([_segment_time(float(ds[k]), speeds[k], speeds[k + 1], float(cap[k]),
+                                 accel_m_s2) for k in range(len(ds))])
+    times = np.concatenate([[0.0], np.cumsum(np.maximum(dt, joints_s))])
     return JointTrajectory(names, states, times, world or {})
+
+
+def _segment_time(length: float, v0: float, v1: float, top: float, accel: float) -> float:
+    """The least time to move `length` from speed v0 to v1, at most `top` and `accel`
+    (speeding up, perhaps cruising, slowing down; 0 for no length or no speed)."""
+    if length <= 0:
+        return 0.0
+    peak = min(top, math.sqrt((2 * accel * length + v0 * v0 + v1 * v1) / 2))
+    if peak <= 0:
+        return 0.0
+    cruise = max(0.0, length - (2 * peak * peak - v0 * v0 - v1 * v1) / (2 * accel))
+    return (2 * peak - v0 - v1) / accel + cruise / peak

@@ -526,6 +526,10 @@ class MotionCheck:
         #: upright held items that this motion moves: (frame row, the item's z axis in the
         #: tool frame, cos of the largest tilt allowed, name)
         self._upright = []
+        #: each of those items' origin in its tool frame, and the lowest its origin may go
+        #: (None: no floor; the arm planner sets one for its OMPL searches, so that a path
+        #: does not swing the item far below both its ends)
+        origins = []
         for h in held:
             kind = scene.items[h.name].model.kind
             if kind.upright and tool_frame(h.arm) in layout.links:
@@ -533,16 +537,12 @@ class MotionCheck:
                                       np.asarray(h.relative)[:3, 2].copy(),
                                       math.cos(math.radians(kind.upright_tolerance_deg)),
                                       h.name))
+                origins.append(np.asarray(h.relative)[:3, 3])
+        self._upright_origins = np.array(origins, dtype=float).reshape(-1, 3)
+        self.upright_floors: np.ndarray | None = None
         #: the tool frames of those items' grippers, in `_upright`'s order, and a copy of
         #: the configuration for asking their tilt (`_tips`)
         self._upright_links = tuple(layout.links[row] for row, *_ in self._upright)
-        #: each of those items' origin in its tool frame, and the lowest its origin may go
-        #: (None: no floor; the arm planner sets one for its sampled searches, so that a
-        #: path does not swing the item far below both its ends)
-        self._upright_origins = np.array([np.asarray(h.relative)[:3, 3] for h in held
-                                          if scene.items[h.name].model.kind.upright
-                                          and tool_frame(h.arm) in layout.links])
-        self.upright_floors: np.ndarray | None = None
         self._scratch_q = self._q.copy()
         self._world_joints = dict(scene.belief.world_joints)
         self._place_obstacles()
