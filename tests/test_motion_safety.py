@@ -130,11 +130,12 @@ class RecordsSearches(ArmMotionPlanner):
         self.searches: list[tuple[float, bool]] = []
         self.colliding_first = colliding_first
 
-    def _ompl(self, scene, start, goal, steps, seed, check_every, margin):
+    def _ompl(self, scene, start, goal, steps, seed, check_every, margin, box=0.0):
         if self.colliding_first and not self.searches:
             vertices = np.vstack([start, goal])
         else:
-            vertices = super()._ompl(scene, start, goal, steps, seed, check_every, margin)
+            vertices = super()._ompl(scene, start, goal, steps, seed, check_every, margin,
+                                     box)
         self.searches.append((margin, vertices is not None))
         return vertices
 
