@@ -4,6 +4,7 @@ carried by the other hand (kinematic backend: this is about the plan, on every P
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -33,15 +34,7 @@ def test_clearing_up_the_other_hand_puts_it_into_the_cupboard(
     was, as it was picked up in reverse (in c1 a new arm solution for that spot once
     touched the island, and the cup was let go in the air), and the left hand carries it
     in. Every executed state of the put-back and the second fetch is checked."""
-    deliver = TransportAction._deliver
-
-    def refuse_the_right_hand(self, ctx, obj, planned=None, target=None):
-        held = [a for a, h in ctx.holding.items() if h.obj == obj.name]
-        if self.target is not None and obj.name == item and held == ["right"]:
-            raise PlacementFailed("the place is taken (injected)", obj=obj.name)
-        return deliver(self, ctx, obj, planned, target)
-
-    monkeypatch.setattr(TransportAction, "_deliver", refuse_the_right_hand)
+    _refuse_deliveries(monkeypatch, lambda name, arm: name == item and arm == "right")
     path = tmp_path / f"{setup}.jsonl"
     with TrialRunner(setup, backend="kinematic") as runner:
         result = runner.run(strategy, plan="clear-table", seed=seed, trace=path)
@@ -64,21 +57,33 @@ def test_clearing_up_the_other_hand_puts_it_into_the_cupboard(
     assert physics == [], [f.describe() for f in physics]
 
 
-@pytest.fixture
-def refused(monkeypatch: pytest.MonkeyPatch) -> list[str]:
-    """Every delivery to a target is refused (injected), as a taken place would be; the
-    arm that held the item each time is recorded. Putting it back (on its surface) is
-    left as it is."""
-    arms: list[str] = []
+def _refuse_deliveries(monkeypatch: pytest.MonkeyPatch,
+                       refuse: Callable[[str, str], bool]) -> None:
+    """A delivery to a target is refused (injected), as a taken place would be, where
+    `refuse(item, arm holding it)` says so. Putting it back (on its surface) is left as it
+    is."""
     deliver = TransportAction._deliver
 
-    def refuse_at_the_target(self, ctx, obj, planned=None, target=None):
-        if self.target is None:
-            return deliver(self, ctx, obj, planned, target)
-        arms.append(next(a for a, h in ctx.holding.items() if h.obj == obj.name))
-        raise PlacementFailed("the place is taken (injected)", obj=obj.name)
+    def refusing(self, ctx, obj, planned=None, target=None):
+        if self.target is not None and \
+                refuse(obj.name, next(a for a, h in ctx.holding.items() if h.obj == obj.name)):
+            raise PlacementFailed("the place is taken (injected)", obj=obj.name)
+        return deliver(self, ctx, obj, planned, target)
 
-    monkeypatch.setattr(TransportAction, "_deliver", refuse_at_the_target)
+    monkeypatch.setattr(TransportAction, "_deliver", refusing)
+
+
+@pytest.fixture
+def refused(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """Every delivery to a target is refused; the arm that held the item each time is
+    recorded."""
+    arms: list[str] = []
+
+    def record(item: str, arm: str) -> bool:
+        arms.append(arm)
+        return True
+
+    _refuse_deliveries(monkeypatch, record)
     return arms
 
 

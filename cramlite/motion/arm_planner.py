@@ -220,8 +220,11 @@ class ArmMotionPlanner:
         # first search that spent its budget finding no path is not repeated finely: with
         # four times the checks per motion the same budget explores a quarter as far (over
         # c1-c3 none of those second searches found a path; each spent 1.6-1.7 s).
+        upright = scene.moves_upright_items
+        boxes = (self.options.upright_box, 0.0) if upright and self.options.upright_box \
+            else (0.0,)
         drop, floors = self.options.upright_drop_m, scene.upright_floors
-        if drop is not None and scene.moves_upright_items:
+        if drop is not None and upright:
             scene.upright_floors = scene.upright_heights(np.vstack([start, goal])).min(
                 axis=0) - drop
         try:
@@ -230,8 +233,6 @@ class ArmMotionPlanner:
                 if margin and not (scene.is_free(start, margin) and
                                    scene.is_free(goal, margin)):
                     continue
-                boxes = (self.options.upright_box, 0.0) \
-                    if scene.moves_upright_items and self.options.upright_box else (0.0,)
                 for box in boxes:
                     vertices = self._ompl(scene, start, goal, steps, seed, every, margin, box)
                     if vertices is not None:
@@ -279,7 +280,9 @@ class ArmMotionPlanner:
         return None
 
     def _bounds(self, names: Sequence[str], start: np.ndarray, goal: np.ndarray,
-                ) -> tuple[np.ndarray, np.ndarray]:
+                box: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Where OMPL samples each joint: within its limits (a continuous joint within a
+        turn of either end), and with `box` only this far from the box the ends span."""
         lower, upper = [], []
         for i, name in enumerate(names):
             if name in self.limits.continuous:
@@ -287,6 +290,9 @@ class ArmMotionPlanner:
             else:
                 lo, hi = self.limits.lower[name], self.limits.upper[name]
                 lo, hi = min(lo, start[i], goal[i]), max(hi, start[i], goal[i])
+            if box:
+                lo = max(lo, min(start[i], goal[i]) - box)
+                hi = min(hi, max(start[i], goal[i]) + box)
             lower.append(lo)
             upper.append(hi)
         return np.array(lower), np.array(upper)
@@ -295,10 +301,7 @@ class ArmMotionPlanner:
               steps: np.ndarray, seed: int, check_every: float,
               margin: float, box: float = 0.0) -> np.ndarray | None:
         n = len(start)
-        lower, upper = self._bounds(scene.joints, start, goal)
-        if box:
-            lower = np.maximum(lower, np.minimum(start, goal) - box)
-            upper = np.minimum(upper, np.maximum(start, goal) + box)
+        lower, upper = self._bounds(scene.joints, start, goal, box)
         space = ob.RealVectorStateSpace(n)
         bounds = ob.RealVectorBounds(n)
         for i in range(n):  # normalised units: one unit = one allowed step of that joint

@@ -198,16 +198,15 @@ def time_along_path(names: Sequence[str], states: np.ndarray, arc_m: np.ndarray,
         cap = np.minimum(speed_m_s, np.where(joints_s > 0, ds / joints_s, np.inf))
     # the tool's speed at each state: within the caps of the segments on either side,
     # from rest to rest, changing at most at the acceleration
-    v = np.zeros(len(arc))
-    v[1:-1] = np.minimum(cap[:-1], cap[1:])
-    reach = 2 * accel_m_s2 * ds
-    speeds = v.tolist()
+    speeds = [0.0, *np.minimum(cap[:-1], cap[1:]).tolist(), 0.0]
+    reach = (2 * accel_m_s2 * ds).tolist()
     for k in range(len(ds)):
         speeds[k + 1] = min(speeds[k + 1], math.sqrt(speeds[k] ** 2 + reach[k]))
     for k in range(len(ds) - 1, -1, -1):
         speeds[k] = min(speeds[k], math.sqrt(speeds[k + 1] ** 2 + reach[k]))
-    dt = np.array([_segment_time(float(ds[k]), speeds[k], speeds[k + 1], float(cap[k]),
-                                 accel_m_s2) for k in range(len(ds))])
+    dt = np.array([_segment_time(length, speeds[k], speeds[k + 1], top, accel_m_s2)
+                   for k, (length, top) in enumerate(zip(ds.tolist(), cap.tolist(),
+                                                           strict=True))])
     times = np.concatenate([[0.0], np.cumsum(np.maximum(dt, joints_s))])
     return JointTrajectory(names, states, times, world or {})
 

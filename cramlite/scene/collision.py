@@ -540,9 +540,10 @@ class MotionCheck:
                 origins.append(np.asarray(h.relative)[:3, 3])
         self._upright_origins = np.array(origins, dtype=float).reshape(-1, 3)
         self.upright_floors: np.ndarray | None = None
-        #: the tool frames of those items' grippers, in `_upright`'s order, and a copy of
-        #: the configuration for asking their tilt (`_tips`)
-        self._upright_links = tuple(layout.links[row] for row, *_ in self._upright)
+        #: the rows and tool frames of those items' grippers, in `_upright`'s order, and a
+        #: copy of the configuration for asking their tilt (`_tips`)
+        self._upright_rows = [row for row, *_ in self._upright]
+        self._upright_links = tuple(layout.links[row] for row in self._upright_rows)
         self._scratch_q = self._q.copy()
         self._world_joints = dict(scene.belief.world_joints)
         self._place_obstacles()
@@ -907,8 +908,7 @@ class MotionCheck:
         return self._heights(self._link_frames(states))
 
     def _heights(self, frames: np.ndarray) -> np.ndarray:
-        rows = [row for row, *_ in self._upright]
-        tools = frames[:, rows]  # (S x U x 4 x 4)
+        tools = frames[:, self._upright_rows]  # (S x U x 4 x 4)
         return np.einsum("suj,uj->su", tools[:, :, 2, :3], self._upright_origins) + \
             tools[:, :, 2, 3]
 
