@@ -183,3 +183,32 @@ def test_a_parallel_motion_nobody_watches_goes_straight_to_its_last_state(backen
                 assert seen == [] and len(calls) == 2  # (each primitive sent whole)
     for (pose, torso) in ends:
         assert pose == pytest.approx((0.5, -1.8, 0.3)) and torso == pytest.approx(0.2)
+
+
+def test_a_joint_motion_sampled_at_a_drives_times_stays_on_its_profile() -> None:
+    """A deferred joint motion runs at the drive's times (its states are farther apart):
+    sampled on its own Ruckig profile there, its speed changes at most at each joint's
+    acceleration however finely it is sampled, and at its own times it is at its own
+    states (interpolated straight between them, the speed would jump at every state)."""
+    from cramlite.designators.context import _combined
+    from cramlite.motion.trajectory import BaseTrajectory, JointLimits, time_joint_path
+
+    names = ("torso_lift_joint", "r_shoulder_pan_joint")
+    limits = JointLimits({n: -3.0 for n in names}, {n: 3.0 for n in names},
+                         {names[0]: 0.013, names[1]: 2.088},
+                         {names[0]: 0.052, names[1]: 8.352}, frozenset(),
+                         frozenset({names[0]}))
+    joints = time_joint_path(names, np.array([[0.0, 0.0], [0.1, -1.0], [0.25, 0.5]]), limits)
+    assert np.allclose(joints.at_times(joints.times), joints.positions, atol=1e-9)
+    times = np.arange(0.0, 10.0, 0.02)
+    drive = BaseTrajectory(np.column_stack([times * 0.1, np.zeros_like(times),
+                                            np.zeros_like(times)]), times)
+    _, combined, _ = _combined(drive, joints, 1.0)
+    dt = np.diff(combined.times)
+    assert dt.min() < 0.03  # (sampled at the drive's 20 ms during it)
+    v = np.vstack([np.zeros(2), np.diff(combined.positions, axis=0) / dt[:, None],
+                   np.zeros(2)])
+    lengths = np.concatenate([[0.0], dt, [0.0]])
+    a = np.abs(np.diff(v, axis=0)) / ((lengths[:-1] + lengths[1:]) / 2)[:, None]
+    assert np.all(a <= np.array([0.052, 8.352]) * (1 + 1e-6) + 1e-9), a.max(axis=0)
+    assert np.allclose(combined.positions[-1], joints.positions[-1])

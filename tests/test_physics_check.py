@@ -89,6 +89,50 @@ def test_a_jump_of_the_base_is_found(trace) -> None:
     assert any(abs(f.line - (i + 2)) <= 1 for f in found)
 
 
+def _moving_arm_state(trace, joint: str) -> int:
+    """A state in the middle of a motion of `joint` (moving into it and out of it)."""
+    k = trace.header["joints"].index(joint)
+    q = [s["q"][k] for s in trace.states]
+    moving = [i for i in range(1, len(q) - 1)
+              if q[i - 1] != q[i] != q[i + 1] and trace.states[i]["t"] > trace.states[i - 1]["t"]]
+    return moving[len(moving) // 2]
+
+
+def test_a_joint_whose_speed_jumps_is_found_with_its_time_and_line(trace) -> None:
+    """A joint's acceleration, by finite differences of the states (the URDF gives only
+    velocity limits: the limit is the velocity reached in ACCELERATION_TIME_S): a state
+    pushed 3 cm of the way aside is a jump in speed there."""
+    joint = "r_elbow_flex_joint"
+    bad = copy.deepcopy(trace)
+    i = _moving_arm_state(bad, joint)
+    bad.states[i]["q"][bad.header["joints"].index(joint)] += 0.03
+    found = physics_findings(bad)
+    assert {f.kind for f in found} == {"joint acceleration"}, [f.describe() for f in found]
+    (worst,) = [f for f in found if f.what == joint]
+    assert abs(worst.line - (i + 2)) <= 1 and worst.value > worst.limit
+    assert worst.limit == pytest.approx(3.3 / 0.25, abs=1e-3)  # (the URDF's 3.3 rad/s)
+    assert worst.unit == "rad/s^2"
+
+
+def test_a_joint_moved_in_no_time_is_a_jump_and_a_turn_of_a_continuous_one_is_not(
+        trace) -> None:
+    joints = trace.header["joints"]
+    bad = copy.deepcopy(trace)
+    i = _moving_arm_state(bad, "r_elbow_flex_joint")
+    twin = copy.deepcopy(bad.states[i])
+    twin["q"][joints.index("r_shoulder_pan_joint")] += 0.01
+    bad.states.insert(i + 1, twin)  # (the same time, the shoulder 0.01 rad further)
+    found = [f for f in physics_findings(bad) if f.kind == "joint acceleration"]
+    assert any(f.what == "a jump of r_shoulder_pan_joint" and f.value == math.inf and
+               f.line == i + 3 for f in found), [f.describe() for f in found]
+    # a continuous joint written a whole turn apart is where it was
+    turned = copy.deepcopy(trace)
+    wrist = joints.index("r_wrist_roll_joint")
+    for state in turned.states[len(turned.states) // 2:]:
+        state["q"][wrist] += 2 * math.pi
+    assert physics_findings(turned) == []
+
+
 def test_an_item_put_down_turned_is_found_up_to_its_symmetry(trace) -> None:
     for name, degrees, expected in (("breakfast-cereal", 90, True),
                                     ("breakfast-cereal", 180, False),  # (a box)

@@ -76,8 +76,8 @@ def _replay(args: argparse.Namespace, trace) -> int:
         physics = physics_findings(trace)
         for finding in physics:
             print(f"not physical: {finding.describe()}")
-        print(f"physics (fingers against what they hold, upright items, base accelerations, "
-              f"yaw at the targets, items standing on something): "
+        print(f"physics (fingers against what they hold, upright items, base and joint "
+              f"accelerations, yaw at the targets, items standing on something): "
               f"{'nothing' if not physics else len(physics)} found")
         status = EXIT_PLAN_FAILED if found or physics else EXIT_OK
     if args.out:
@@ -138,8 +138,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                              "meshes; independent of the planner's check); and physics: "
                              "fingertips at most 2 mm inside what they hold, upright items "
                              "within their tilt, base accelerations within the header's "
-                             "limits, items at their targets within 10 degrees of yaw, every "
-                             "item out of the hand standing on something")
+                             "limits, each joint's acceleration within its velocity limit "
+                             "reached in 0.25 s, items at their targets within 10 degrees of "
+                             "yaw, every item out of the hand standing on something")
     replay.add_argument("--tolerance-cm", default=1.0,
                         type=float_in_range(0, 100, "centimetres > 0 and <= 100",
                                             open_minimum=True),

@@ -194,9 +194,9 @@ def _combined(base: BaseTrajectory, joints: JointTrajectory, start_s: float,
     after = len(times) - before - len(base_times)
     combined_poses = np.concatenate([np.repeat(poses[:1], before, axis=0), poses,
                                      np.repeat(poses[-1:], after, axis=0)])
-    positions = np.asarray(joints.positions, dtype=float)
-    q = np.column_stack([np.interp(times, joint_times, positions[:, k])
-                         for k in range(positions.shape[1])])
+    # (on the joints' own profile at the drive's times: interpolated straight between its
+    # states, the joints would change speed in a jump at each one)
+    q = joints.at_times(times)
     return (BaseTrajectory(combined_poses, times),
             JointTrajectory(tuple(joints.names), q, times), start_s)
 

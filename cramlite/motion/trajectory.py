@@ -17,8 +17,9 @@ straight interpolation between consecutive states is what the robot does (at mos
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
@@ -76,10 +77,26 @@ class JointTrajectory:
     positions: np.ndarray
     times: np.ndarray
     world: dict[str, np.ndarray] = field(default_factory=dict)
+    #: Positions at any robot times (from 0 to the end) on the timed motion itself, where
+    #: the timing knows it (`time_joint_path`: each segment's Ruckig profile). Sampled more
+    #: finely than its states (while the base drives), a motion interpolated straight
+    #: between them would change speed in a jump at every state.
+    profile: Callable[[np.ndarray], np.ndarray] | None = field(default=None, compare=False,
+                                                               repr=False)
 
     @property
     def duration_s(self) -> float:
         return float(self.times[-1]) if len(self.times) else 0.0
+
+    def at_times(self, times: np.ndarray) -> np.ndarray:
+        """Positions (len(times) x joints) at these robot times: on the profile where it is
+        known, else straight between the states (each held before the first and after the
+        last)."""
+        times = np.asarray(times, dtype=float)
+        if self.profile is not None:
+            return self.profile(times)
+        return np.column_stack([np.interp(times, self.times, self.positions[:, k])
+                                for k in range(self.positions.shape[1])])
 
     def final(self) -> dict[str, float]:
         return {n: float(v) for n, v in zip(self.names, self.positions[-1], strict=True)}
@@ -153,6 +170,7 @@ def time_joint_path(names: Sequence[str], vertices: np.ndarray, limits: JointLim
     acceleration = np.array([limits.acceleration[n] for n in names])
     positions, times = [vertices[0]], [0.0]
     t0 = 0.0
+    segments = []  # (start time, profile, end vertex)
     for a, b in zip(vertices[:-1], vertices[1:], strict=True):
         delta = b - a
         if not np.any(np.abs(delta) > 1e-12):
@@ -164,11 +182,37 @@ def time_joint_path(names: Sequence[str], vertices: np.ndarray, limits: JointLim
             at = profile.get_first_time_at_position(lead, float(state[lead]))
             positions.append(state)
             times.append(t0 + (float(at) if at is not None else 0.0))
+        segments.append((t0, profile, b))
         t0 += float(profile.duration)
         positions.append(b)
         times.append(t0)
     times_arr = np.maximum.accumulate(np.array(times))  # guard against rounding
-    return JointTrajectory(names, np.array(positions), times_arr)
+    return JointTrajectory(names, np.array(positions), times_arr,
+                           profile=_profile_sampler(vertices[0], segments))
+
+
+def _profile_sampler(first: np.ndarray, segments: list[tuple[float, Any, np.ndarray]],
+                     ) -> Callable[[np.ndarray], np.ndarray]:
+    """Positions at given times along rest-to-rest Ruckig segments that follow each other
+    (the first vertex before them, the last after them)."""
+    starts = np.array([t0 for t0, _, _ in segments])
+
+    def sample(times: np.ndarray) -> np.ndarray:
+        out = np.empty((len(times), len(first)))
+        which = np.searchsorted(starts, times, side="right") - 1
+        for k, (t, i) in enumerate(zip(np.asarray(times).tolist(), which.tolist(),
+                                       strict=True)):
+            if i < 0:
+                out[k] = first
+                continue
+            t0, profile, end = segments[i]
+            if t - t0 >= profile.duration:
+                out[k] = end
+            else:
+                out[k] = profile.at_time(t - t0)[0]
+        return out
+
+    return sample
 
 
 def time_along_path(names: Sequence[str], states: np.ndarray, arc_m: np.ndarray,
@@ -207,8 +251,111 @@ def time_along_path(names: Sequence[str], states: np.ndarray, arc_m: np.ndarray,
     dt = np.array([_segment_time(length, speeds[k], speeds[k + 1], top, accel_m_s2)
                    for k, (length, top) in enumerate(zip(ds.tolist(), cap.tolist(),
                                                            strict=True))])
-    times = np.concatenate([[0.0], np.cumsum(np.maximum(dt, joints_s))])
+    # each joint (and the tool along the curve) changes its speed between neighbouring
+    # segments at most at its acceleration: where the curve turns a joint round, the
+    # segments on either side take longer
+    steps = np.column_stack([np.diff(states, axis=0), ds])
+    accel = np.array([*(limits.acceleration[n] for n in names), accel_m_s2])
+    dt = limit_accelerations(steps, np.maximum(dt, joints_s), accel)
+    times = np.concatenate([[0.0], np.cumsum(dt)])
     return JointTrajectory(names, states, times, world or {})
+
+
+#: Forward and backward passes of `limit_accelerations` before it gives up finding the
+#: segments' speeds one by one and slows the whole path instead.
+ACCELERATION_PASSES = 50
+
+
+def limit_accelerations(steps: np.ndarray, dt: np.ndarray, accel: np.ndarray) -> np.ndarray:
+    """Segment times, each at least as long as given, with which every coordinate's speed
+    (steps: segments x coordinates) changes between neighbouring segments, and from rest
+    before the first and to rest after the last, at most at its acceleration (`accel`, one
+    per coordinate), as finite differences of the timed states measure it:
+    |v_k - v_k-1| <= a (dt_k-1 + dt_k) / 2.
+
+    Each segment keeps its direction and runs at a share s_k <= 1 of the speed it was
+    given (dt_k = given_k / s_k). Forward and backward passes lower each share to the
+    most its junctions with the segments before and after allow, until none changes: a
+    junction that turns a joint round is passed slowly, and the segments around it slow
+    down to it and speed up after it at the acceleration. (Finite differences would also
+    pass one segment crawling between fast ones, its long time hiding the change of
+    speed: no robot moves so, and the shares kept are those on the side of the neighbour's
+    speed.) Should the passes not settle, the whole path is slowed by the factor that
+    meets every junction (slowing all by f divides each change of speed by f and
+    multiplies its time by f). Segments of no time (that move nothing) are left out."""
+    dt = np.array(dt, dtype=float)
+    steps = np.asarray(steps, dtype=float)
+    accel = np.asarray(accel, dtype=float)
+    if not len(dt) or _junction_ratios(steps, dt, accel).max() <= 1.0 + 1e-9:
+        return dt
+    timed = np.flatnonzero(dt > 0)
+    if np.any(np.abs(np.delete(steps, timed, axis=0)) > 0):
+        raise ValueError("limit_accelerations: a segment that moves needs time")
+    given = dt[timed].tolist()
+    speed = (steps[timed] / dt[timed][:, None]).tolist()  # (each one's velocity as given)
+    share = [1.0] * len(timed)
+    rest = [0.0] * steps.shape[1]
+    limits = accel.tolist()
+    last = len(share) - 1
+
+    def most(k: int, other: int | None) -> float:
+        if other is None:
+            return _share_most(speed[k], given[k], rest, 0.0, limits)
+        return _share_most(speed[k], given[k], [v * share[other] for v in speed[other]],
+                           given[other] / share[other], limits)
+
+    for _ in range(ACCELERATION_PASSES):
+        before = list(share)
+        share[0] = min(share[0], most(0, None))
+        for k in range(1, last + 1):
+            share[k] = min(share[k], most(k, k - 1))
+        share[last] = min(share[last], most(last, None))
+        for k in range(last - 1, -1, -1):
+            share[k] = min(share[k], most(k, k + 1))
+        if share == before:
+            break
+    out = dt.copy()
+    out[timed] = np.array(given) / np.array(share)
+    worst = float(_junction_ratios(steps, out, accel).max())
+    if worst > 1.0 + 1e-9:
+        out *= math.sqrt(worst) * (1 + 1e-12)
+    return out
+
+
+def _share_most(velocity: list[float], given: float, other_velocity: list[float],
+                other_dt: float, accel: list[float]) -> float:
+    """The largest share s of `velocity` (a segment given `given` seconds) that keeps its
+    junction with a neighbour moving at `other_velocity` for `other_dt` seconds: per
+    coordinate |s v - c| s <= a (other_dt s + given) / 2, below the share where the
+    segment would outrun the neighbour (or turn against it) too fast."""
+    best = math.inf
+    for v, c, a in zip(velocity, other_velocity, accel, strict=True):
+        b, d = a * other_dt / 2, a * given / 2
+        av, ac = abs(v), abs(c)
+        if v * c > 0:  # the same way: |s v - c| falls to 0 at s = c / v, then grows
+            high = ((ac + b) + math.sqrt((ac + b) ** 2 + 4 * av * d)) / (2 * av)
+        elif av > 0:  # the other way, or from rest: |s v - c| = s |v| + |c|
+            high = (-(ac - b) + math.sqrt((ac - b) ** 2 + 4 * av * d)) / (2 * av)
+        elif ac > b:  # (this coordinate stands here, the neighbour's moves)
+            high = d / (ac - b)
+        else:
+            continue
+        best = min(best, high)
+    return best
+
+
+def _junction_ratios(steps: np.ndarray, dt: np.ndarray, accel: np.ndarray) -> np.ndarray:
+    """At each junction (before the first segment, between each two, after the last): the
+    largest change of speed over what the acceleration allows there (<= 1: kept)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = np.where(dt[:, None] > 0, steps / dt[:, None], 0.0)
+    zero = np.zeros((1, steps.shape[1]))
+    change = np.abs(np.diff(np.vstack([zero, v, zero]), axis=0))
+    lengths = np.concatenate([[0.0], dt, [0.0]])
+    allowed = accel[None, :] * ((lengths[:-1] + lengths[1:]) / 2)[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(change > 0, change / allowed, 0.0)
+    return ratio.max(axis=1)
 
 
 def _segment_time(length: float, v0: float, v1: float, top: float, accel: float) -> float:

@@ -11,6 +11,11 @@ From the recorded states alone (no planner code):
 - base: the base's accelerations, by finite differences of consecutive states (from rest
   before the first and to rest after the last), within the limits the trace's header
   states (or cramlite's defaults), with `ACCEL_TOLERANCE` for the differencing;
+- joints: each joint's acceleration likewise, within its velocity limit (the URDF's, or
+  the header's where tighter) reached in `ACCELERATION_TIME_S` (the URDF gives no
+  acceleration limits: the assumption the arm's timing makes), with `ACCEL_TOLERANCE` and
+  the trace's rounding (6 decimals) for the differencing; a mimic joint follows its
+  leader and is not checked on its own;
 - yaw: at the end, an item put at a target of the setup (setting the table; clearing up
   into its container) stands within `YAW_TOLERANCE_DEG` of the target's yaw, up to the
   item's symmetry;
@@ -90,6 +95,8 @@ def physics_findings(trace: Trace, checker: TraceChecker | None = None) -> list[
     for finding in _tilts(trace, checker):
         note(finding)
     for finding in _base_accelerations(trace):
+        note(finding)
+    for finding in _joint_accelerations(trace):
         note(finding)
     for finding in _yaws(trace, checker):
         note(finding)
@@ -270,6 +277,69 @@ def _base_accelerations(trace: Trace):
             line = int(min(k, len(states) - 1)) + 2
             yield Finding("base acceleration", what, round(float(values[k]), 2),
                           round(limit, 2), unit, float(t[min(k, len(t) - 1)]), line)
+
+
+#: A trace's positions are written to 6 decimals: differencing them twice may be off by
+#: this much over the product of the two steps' lengths (s^2).
+ROUNDING_M = 2e-6
+
+
+def _joint_accelerations(trace: Trace):
+    """Each joint's acceleration between consecutive steps (a step of no time that moves
+    a joint is a jump; one that moves nothing is the same state written twice), from rest
+    before the first state and to rest after the last."""
+    from cramlite.motion.trajectory import ACCELERATION_TIME_S
+    from cramlite.scene.models import pr2_model
+
+    states = trace.states
+    if len(states) < 2:
+        return
+    model = pr2_model()
+    followers = {m.joint for m in model.mimics}
+    claimed = (trace.header.get("robot") or {}).get("joint_limits") or {}
+    columns, limits, names, turning = [], [], [], []
+    for i, name in enumerate(trace.header["joints"]):
+        joint = model.joints.get(name)
+        if joint is None or name in followers or not joint.velocity > 0:
+            continue
+        velocity = joint.velocity
+        given = claimed.get(name)
+        if isinstance(given, list) and len(given) >= 3 and \
+                isinstance(given[2], int | float) and 0 < given[2] < velocity:
+            velocity = float(given[2])
+        turning.append(joint.kind == "continuous")
+        columns.append(i)
+        limits.append(velocity / ACCELERATION_TIME_S)
+        names.append((name, "m/s^2" if joint.kind == "prismatic" else "rad/s^2"))
+    if not columns:
+        return
+    t = np.array([s["t"] for s in states], dtype=float)
+    q = np.array([s["q"] for s in states], dtype=float)[:, columns]
+    # (a continuous joint's angle may be written a turn apart: the same angle)
+    q[:, turning] = np.unwrap(q[:, turning], axis=0)
+    dt, dq = np.diff(t), np.diff(q, axis=0)
+    still = dt <= 1e-9
+    for k in np.flatnonzero(still & np.any(np.abs(dq) > ROUNDING_M, axis=1)):
+        j = int(np.argmax(np.abs(dq[k])))
+        yield Finding("joint acceleration", f"a jump of {names[j][0]}", math.inf, limits[j],
+                      names[j][1], float(t[k + 1]), int(k) + 3)
+    steps = np.flatnonzero(~still)  # (the state each step ends at: steps + 1)
+    if not len(steps):
+        return
+    v = dq[steps] / dt[steps, None]
+    v = np.vstack([np.zeros(len(columns)), v, np.zeros(len(columns))])
+    lengths = np.concatenate([[0.0], dt[steps], [0.0]])
+    gap = (lengths[:-1] + lengths[1:]) / 2
+    shorter = np.where(np.minimum(lengths[:-1], lengths[1:]) > 0,
+                       np.minimum(lengths[:-1], lengths[1:]), np.maximum(lengths[:-1],
+                                                                        lengths[1:]))
+    a = np.abs(np.diff(v, axis=0)) / gap[:, None]
+    allowed = np.array(limits) * (1 + ACCEL_TOLERANCE) + (ROUNDING_M / (shorter * gap))[:, None]
+    for k, j in zip(*np.nonzero(a > allowed), strict=True):
+        # (between step k-1 and step k: at the state step k-1 ends at)
+        state = int(steps[k - 1]) + 1 if k > 0 else int(steps[0])
+        yield Finding("joint acceleration", names[j][0], round(float(a[k, j]), 2),
+                      round(limits[j], 3), names[j][1], float(t[state]), state + 2)
 
 
 def _supports(trace: Trace, checker: TraceChecker):
