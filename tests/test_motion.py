@@ -269,8 +269,9 @@ def test_footprints_checked_by_the_chunk_answer_as_one_pose_at_a_time(
     """`all_free` (a path's waypoints, checked a chunk at a time in numpy) gives the answer
     of `is_free` asked pose by pose, and remembers what it would (also where the memory
     fills up and starts afresh within a path): with something sticking out of the base
-    (an outline ahead of it, checked against the whole map) and an exact check that
-    decides where that outline touches. Poses must be finite; far ones are outside."""
+    (an outline ahead of it, checked against the whole map and the boxes of items
+    standing) and an exact check that decides where that outline touches. Poses must be
+    finite; far ones are outside."""
     from cramlite.motion import footprint
 
     if memory is not None:
@@ -280,16 +281,21 @@ def test_footprints_checked_by_the_chunk_answer_as_one_pose_at_a_time(
                       for y in np.linspace(-0.2, 0.2, 6)])
     asked: dict[str, list] = {"chunks": [], "alone": []}
 
-    def checker(log: list) -> FootprintChecker:
+    bounds = shared.occupancy.bounds
+    corners = np.random.default_rng(5).uniform([bounds.x_min, bounds.y_min],
+                                               [bounds.x_max, bounds.y_max], size=(8, 2))
+    items = np.hstack([corners, corners + 0.12])  # (8 boxes of 12 cm, standing anywhere)
+
+    def checker(log: list, boxes: np.ndarray = items) -> FootprintChecker:
         check = FootprintChecker(shared.occupancy)
-        check.set_carried([(ahead, None)],
+        check.set_carried([(ahead, None, boxes)],
                           lambda x, y, yaw: log.append((x, y, yaw)) or math.sin(7 * x) > 0)
         return check
 
     chunks, alone = checker(asked["chunks"]), checker(asked["alone"])
-    bounds = shared.occupancy.bounds
+    without = checker([], np.zeros((0, 4)))
     rng = np.random.default_rng(11)
-    answers, before = [], []
+    answers, before, differ = [], [], 0
     for _ in range(300):
         start = (rng.uniform(bounds.x_min, bounds.x_max),
                  rng.uniform(bounds.y_min, bounds.y_max), rng.uniform(-math.pi, math.pi))
@@ -301,10 +307,12 @@ def test_footprints_checked_by_the_chunk_answer_as_one_pose_at_a_time(
             path = path[:cut] + old[: int(rng.integers(1, len(old) + 1))] + path[cut:]
         before.append(path)
         expected = all(alone.is_free(*p) for p in path)
+        differ += expected != all(without.is_free(*p) for p in path)
         assert chunks.all_free(path) == expected
         assert chunks._known == alone._known
         answers.append(expected)
     assert 30 < sum(answers) < 270  # (free paths and blocked ones)
+    assert differ > 0  # (the items' boxes sent some poses to the exact check)
     for key, free in chunks._known.items():
         assert free == alone._is_free(*key[1:]), key
     # (the exact check was asked where the outline touched, and let some of them pass)

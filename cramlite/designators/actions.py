@@ -698,21 +698,32 @@ def update_carried(ctx: RobotContext) -> None:
     x, y, yaw = ctx.scene.base
     c, s = math.cos(yaw), math.sin(yaw)
     groups: dict[float, list[np.ndarray]] = {}
-    for holding in ctx.holding.values():
-        ex, ey, ez = ctx.scene.items[holding.obj].extents
-        local = np.array([[sx * ex / 2, sy * ey / 2, sz * ez] for sx in (-1, 1)
-                          for sy in (-1, 1) for sz in (0, 1)])
-        frame = ctx.scene.item_matrix(holding.obj)
-        corners = local @ frame[:3, :3].T + frame[:3, 3]
+    held = {holding.obj for holding in ctx.holding.values()}
+    for name in held:
+        corners = _item_corners(ctx, name)
         dx, dy = corners[:, 0] - x, corners[:, 1] - y
         robot_frame = np.column_stack([c * dx + s * dy, -s * dx + c * dy, corners[:, 2]])
         _stick_out(robot_frame, ctx.checker.half_size_m, groups)
     for bucket, points in _upper_body_outline(ctx, set(ARMS)).items():
         groups.setdefault(bucket, []).append(points)
-    ctx.checker.set_carried([(np.vstack(points), carried_map(ctx.scene, bucket))
+    # the items standing (the maps hold the kitchen only): each one's xy box and top
+    standing = [_item_corners(ctx, name) for name in ctx.scene.items if name not in held]
+    boxes = np.array([[*k[:, :2].min(axis=0), *k[:, :2].max(axis=0)] for k in standing])
+    tops = np.array([k[:, 2].max() for k in standing])
+    ctx.checker.set_carried([(np.vstack(points), carried_map(ctx.scene, bucket),
+                              boxes[tops > bucket] if len(standing) else np.zeros((0, 4)))
                              for bucket, points in sorted(groups.items())],
                             _exact_upper_body(ctx) if groups else None)
     ctx.footprint_stale = False
+
+
+def _item_corners(ctx: RobotContext, name: str) -> np.ndarray:
+    """The eight corners (world frame) of an item's box as it stands or is held."""
+    ex, ey, ez = ctx.scene.items[name].extents
+    local = np.array([[sx * ex / 2, sy * ey / 2, sz * ez] for sx in (-1, 1)
+                      for sy in (-1, 1) for sz in (0, 1)])
+    frame = ctx.scene.item_matrix(name)
+    return local @ frame[:3, :3].T + frame[:3, 3]
 
 
 def _exact_upper_body(ctx: RobotContext):

@@ -25,6 +25,9 @@ KNOWN_POSES = 200_000
 BATCH_POSES = 32
 #: Side of the cells of the clearance grid, in map cells (bounds within 6 cm).
 COARSE_CELLS = 4
+#: Maps with the items standing blocked on them that a footprint check keeps (a few
+#: heights of what sticks out, by where the items stand).
+STAMPED_MAPS = 64
 #: The clearance grid knows distances up to this far (m); beyond, only that they are
 #: farther (nothing a base check asks about reaches that far).
 CLEARANCE_HORIZON_M = 2.0
@@ -100,6 +103,43 @@ class OccupancyMap:
         slack = COARSE_CELLS * self.resolution * math.sqrt(2)
         return self._coarse_clearance - slack <= reach
 
+    def with_boxes(self, boxes: np.ndarray) -> OccupancyMap:
+        """A copy of the map with these xy boxes [x0, y0, x1, y1] (world frame, K x 4)
+        blocked too, grown by its margin (square at the corners: a little more than the
+        furniture's disk), the same bounds and cells; its `near` is this map's (use
+        `near_boxes` for the boxes). A few slices a box: items move, the kitchen's map
+        (and its clearance) is drawn once."""
+        out = object.__new__(OccupancyMap)
+        out.bounds, out.resolution, out.margin = self.bounds, self.resolution, self.margin
+        out.obstacles = self.obstacles
+        out.__dict__["_coarse_clearance"] = self._coarse_clearance
+        blocked = self.blocked.copy()
+        nx, ny = blocked.shape
+        for x0, y0, x1, y1 in np.asarray(boxes, dtype=float).reshape(-1, 4).tolist():
+            i0, j0 = self._cell(x0 - self.margin, y0 - self.margin)
+            i1, j1 = self._cell(x1 + self.margin, y1 + self.margin)
+            if i1 < 0 or j1 < 0 or i0 >= nx or j0 >= ny:
+                continue
+            blocked[max(i0, 0):i1 + 1, max(j0, 0):j1 + 1] = True
+        out.blocked = blocked
+        return out
+
+    def near_boxes(self, boxes: np.ndarray, reach: float) -> np.ndarray:
+        """Coarse cells (as `near`) from which one of these xy boxes [x0, y0, x1, y1] (K x
+        4) may be within `reach` (m): each box grown by the reach and a coarse cell's
+        diagonal, as a rectangle."""
+        f = COARSE_CELLS
+        nx, ny = self.obstacles.shape
+        out = np.zeros((-(-nx // f), -(-ny // f)), dtype=bool)
+        grow = reach + f * self.resolution * math.sqrt(2)
+        for x0, y0, x1, y1 in np.asarray(boxes, dtype=float).reshape(-1, 4).tolist():
+            i0, j0 = self._cell(x0 - grow, y0 - grow)
+            i1, j1 = self._cell(x1 + grow, y1 + grow)
+            if i1 < 0 or j1 < 0 or i0 >= nx or j0 >= ny:
+                continue
+            out[max(i0, 0) // f:i1 // f + 1, max(j0, 0) // f:j1 // f + 1] = True
+        return out
+
     def coarse_cell(self, x: float, y: float) -> tuple[int, int]:
         """The coarse cell of a point (-1, -1 outside the map)."""
         i, j = self._cell(x, y)
@@ -165,6 +205,45 @@ class OccupancyMap:
         np.minimum(idx, highest, out=idx)
         cells = idx.astype(np.intp) + 1
         return flat[cells[:, 0] * (self.blocked.shape[1] + 2) + cells[:, 1]]
+
+
+class _ItemsNear:
+    """Where the items standing may meet a group of robot-frame points: the coarse cells
+    of the map from which one is within their reach, and, for a pose there, whether one
+    (a circle round its box, grown by the margin) meets the points' bounds in the robot's
+    frame (most poses near an item hold no point over it: its lookup is saved)."""
+
+    def __init__(self, cells: np.ndarray, boxes: np.ndarray, margin: float,
+                 points: np.ndarray):
+        self.cells = cells
+        self.centres = (boxes[:, :2] + boxes[:, 2:]) / 2
+        self.radii = np.hypot(boxes[:, 2] - boxes[:, 0], boxes[:, 3] - boxes[:, 1]) / 2 + \
+            margin
+        self.low, self.high = points.min(axis=0), points.max(axis=0)
+        # (plain floats for one pose at a time: a handful of items, numpy's calls cost more)
+        self._each = list(zip(self.centres[:, 0].tolist(), self.centres[:, 1].tolist(),
+                              self.radii.tolist(), strict=True))
+        self._bounds = (*self.low.tolist(), *self.high.tolist())
+
+    def meets(self, x: float, y: float, c: float, s: float) -> bool:
+        """`meet` of one pose."""
+        x0, y0, x1, y1 = self._bounds
+        for cx, cy, r in self._each:
+            dx, dy = cx - x, cy - y
+            fx, fy = c * dx + s * dy, -s * dx + c * dy
+            if fx + r >= x0 and fx - r <= x1 and fy + r >= y0 and fy - r <= y1:
+                return True
+        return False
+
+    def meet(self, xy: np.ndarray, c: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """For each pose (N positions, cos and sin of its yaw): may an item meet it?"""
+        dx = self.centres[None, :, 0] - xy[:, None, 0]
+        dy = self.centres[None, :, 1] - xy[:, None, 1]
+        fx = c[:, None] * dx + s[:, None] * dy  # (the centres in the robot's frame)
+        fy = -s[:, None] * dx + c[:, None] * dy
+        r = self.radii[None, :]
+        return np.any((fx + r >= self.low[0]) & (fx - r <= self.high[0]) &
+                      (fy + r >= self.low[1]) & (fy - r <= self.high[1]), axis=1)
 
 
 def _dilated(grid: np.ndarray, radius: int) -> np.ndarray:
@@ -310,42 +389,68 @@ class FootprintChecker:
         self.outline = np.vstack([edge, inside[order]])
         self._inside_radius_ascending = radius[order][::-1].copy()
         self.half_size_m = half_size_m
-        #: (robot-frame points, the map they are checked against, the coarse cells of that
-        #: map from which an obstacle may be within their reach)
-        self.carried_groups: list[tuple[np.ndarray, OccupancyMap, np.ndarray]] = []
+        #: (robot-frame points, the map they are checked against (the items standing that
+        #: they may touch blocked on it too), the coarse cells of that map from which an
+        #: obstacle may be within their reach, and the items': see `_ItemsNear`)
+        self.carried_groups: list[tuple[np.ndarray, OccupancyMap, np.ndarray,
+                                        _ItemsNear | None]] = []
         #: An exact check of what sticks out (robot links, carried objects) at a base pose,
         #: consulted where the 2D outlines say blocked (see `set_carried`).
         self.exact: Callable[[float, float, float], bool] | None = None
         self._known: dict[tuple, bool] = {}
+        #: (map id, item boxes) -> (that map, kept alive for its id; it with the boxes)
+        self._stamped: dict[tuple, tuple[OccupancyMap, OccupancyMap]] = {}
         self.checks = 0
         pad = occupancy.margin + occupancy.resolution
         self._sure_free = half_size_m * math.sqrt(2) + pad  # circumscribed circle clear
         self._sure_blocked = half_size_m - pad  # something inside the inscribed circle
         # (bounds of the clearance come from a coarse grid: see `clearance_bounds`)
 
-    def set_carried(self, groups: Sequence[tuple[Sequence[Sequence[float]],
-                                                  OccupancyMap | None]],
-                    exact: Callable[[float, float, float], bool] | None = None) -> None:
+    def set_carried(self, groups: Sequence[tuple], exact: Callable[[float, float, float],
+                                                                   bool] | None = None,
+                    ) -> None:
         """What sticks out of the base while driving: groups of robot-frame xy points
         outlining a carried object or an arm's link, each with the map of what it can touch
-        at its height (None: the full map). Empty when nothing sticks out. `exact(x, y,
-        yaw)`: the precise check to consult where an outline touches the furniture."""
+        at its height (None: the full map) and, optionally, the xy boxes [x0, y0, x1, y1]
+        (world frame) of the items standing that rise to its height (the maps hold the
+        kitchen only: an arm over a counter passes over the counter, not over a box on it).
+        Empty when nothing sticks out. `exact(x, y, yaw)`: the precise check to consult
+        where an outline touches the furniture or an item's box."""
         pad = self.occupancy.margin + self.occupancy.resolution
         self._known.clear()
         self.exact = exact
         self.carried_groups = []
         # groups checked against the same map are checked together (one lookup a pose)
-        by_map: dict[int, tuple[OccupancyMap, list[np.ndarray]]] = {}
-        for points, occupancy in groups:
+        by_map: dict[int, tuple[OccupancyMap, list[np.ndarray], np.ndarray]] = {}
+        for group in groups:
+            points, occupancy = group[0], group[1]
+            boxes = np.asarray(group[2] if len(group) > 2 else np.zeros((0, 4)),
+                               dtype=float).reshape(-1, 4)
             pts = np.asarray(points, dtype=float).reshape(-1, 2)
             if len(pts):
                 occupancy = occupancy or self.occupancy
-                by_map.setdefault(id(occupancy), (occupancy, []))[1].append(pts)
-        for occupancy, parts in by_map.values():
+                entry = by_map.setdefault(id(occupancy), (occupancy, [], boxes))
+                entry[1].append(pts)
+        for occupancy, parts, boxes in by_map.values():
             pts = np.vstack(parts)
             # (how far they reach from the base's centre, with the margin)
             reach = float(np.hypot(*pts.T).max()) + pad
-            self.carried_groups.append((pts, occupancy, occupancy.near(reach)))
+            items = None
+            if len(boxes):
+                items = _ItemsNear(occupancy.near_boxes(boxes, reach + occupancy.margin),
+                                   boxes, occupancy.margin, pts)
+                occupancy = self._with_boxes(occupancy, boxes)
+            self.carried_groups.append((pts, occupancy, occupancy.near(reach), items))
+
+    def _with_boxes(self, occupancy: OccupancyMap, boxes: np.ndarray) -> OccupancyMap:
+        """`occupancy.with_boxes(boxes)`, kept while the items stand where they do (the
+        arms move between two updates far more often than an item does)."""
+        key = (id(occupancy), boxes.tobytes())
+        if key not in self._stamped:
+            if len(self._stamped) >= STAMPED_MAPS:
+                self._stamped.clear()
+            self._stamped[key] = (occupancy, occupancy.with_boxes(boxes))
+        return self._stamped[key][1]
 
     def is_free(self, x: float, y: float, yaw: float) -> bool:
         """Is the robot clear of the world at this base pose? (Answers are remembered
@@ -425,9 +530,14 @@ class FootprintChecker:
             blocked = occupancy.blocked_at(points.reshape(-1, 2)).reshape(kept.shape)
             free[check] = ~np.any(blocked & kept, axis=1)
         touching = np.zeros(len(poses), dtype=bool)
-        for points, group_map, near in self.carried_groups:
+        for points, group_map, near, items in self.carried_groups:
             i, j = group_map.coarse_cells_of(xy)
-            ask = free & ~touching & ((i < 0) | near[np.maximum(i, 0), np.maximum(j, 0)])
+            ii, jj = np.maximum(i, 0), np.maximum(j, 0)
+            ask = free & ~touching & ((i < 0) | near[ii, jj])
+            if items is not None:
+                maybe = free & ~touching & ~ask & items.cells[ii, jj]
+                if maybe.any():
+                    ask[maybe] = items.meet(xy[maybe], c[maybe], s[maybe])
             if ask.any():
                 moved = points @ rotation[ask] + xy[ask][:, None, :]
                 hit = group_map.blocked_at(moved.reshape(-1, 2)).reshape(moved.shape[:2])
@@ -458,10 +568,12 @@ class FootprintChecker:
             points = self.outline[:len(self.outline) - skipped]
             if self.occupancy.blocked_at(points @ rotation + (x, y)).any():
                 return False
-        for points, occupancy, near in self.carried_groups:
+        for points, occupancy, near, items in self.carried_groups:
             # (its own map holds only what rises to its height: mostly far away)
             i, j = occupancy.coarse_cell(x, y)
-            if i >= 0 and not near[i, j]:
+            if i >= 0 and not near[i, j] and (
+                    items is None or not items.cells[i, j] or
+                    not items.meets(x, y, c, s)):
                 continue
             if occupancy.blocked_at(points @ rotation + (x, y)).any():
                 # the outlines over-approximate an arm; the exact check decides, if given
