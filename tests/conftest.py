@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -63,3 +64,15 @@ def run_cli(*args: str, stdin: str | None = None, cwd: Path | None = None,
 @pytest.fixture
 def setup_text() -> str:
     return (ROOT / "worlds" / "setups" / "v1.yaml").read_text()
+
+
+def finite_difference_accelerations(positions: np.ndarray, times: np.ndarray,
+                                     ) -> np.ndarray:
+    """|acceleration| of each coordinate at each junction of a timed path (states x
+    coordinates), from rest before its first state and to rest after its last: the finite
+    differences `replay --check` measures."""
+    dt = np.diff(times)
+    v = np.diff(positions, axis=0) / dt[:, None]
+    v = np.vstack([np.zeros((1, positions.shape[1])), v, np.zeros((1, positions.shape[1]))])
+    lengths = np.concatenate([[0.0], dt, [0.0]])
+    return np.abs(np.diff(v, axis=0)) / ((lengths[:-1] + lengths[1:]) / 2)[:, None]

@@ -33,7 +33,7 @@ from cramlite.trace.check import checker_for
 from cramlite.trace.physics import physics_findings
 from cramlite.trial import TrialRunner
 from cramlite.world import load_setup
-from tests.conftest import ROOT, run_cli
+from tests.conftest import ROOT, finite_difference_accelerations, run_cli
 
 ITEMS = ROOT / "worlds" / "items"
 
@@ -303,18 +303,6 @@ def test_the_hand_stays_on_the_handle_it_follows(tmp_path: Path) -> None:
     assert grips == [], [f.describe() for f in grips]
 
 
-def _finite_difference_accelerations(positions: np.ndarray, times: np.ndarray,
-                                     ) -> np.ndarray:
-    """|acceleration| of each coordinate at each junction of a timed path (states x
-    coordinates), from rest before its first state and to rest after its last: the finite
-    differences `replay --check` measures."""
-    dt = np.diff(times)
-    v = np.diff(positions, axis=0) / dt[:, None]
-    v = np.vstack([np.zeros((1, positions.shape[1])), v, np.zeros((1, positions.shape[1]))])
-    lengths = np.concatenate([[0.0], dt, [0.0]])
-    return np.abs(np.diff(v, axis=0)) / ((lengths[:-1] + lengths[1:]) / 2)[:, None]
-
-
 def test_a_segment_that_turns_the_joints_in_place_slows_only_around_itself() -> None:
     """A path timed along its tool's travel (a handle pulled, the tool moved straight):
     where the joints turn while the tool hardly moves (the arm changing its configuration
@@ -341,7 +329,7 @@ def test_a_segment_that_turns_the_joints_in_place_slows_only_around_itself() -> 
     assert np.all(mean <= speed * (1 + 1e-9))
     # the joints and the tool speed up and slow down at most at their accelerations, as
     # finite differences of the timed states measure it (from rest and to rest)
-    found = _finite_difference_accelerations(np.column_stack([states, arc]), timed.times)
+    found = finite_difference_accelerations(np.column_stack([states, arc]), timed.times)
     assert np.all(found <= np.array([4.0, 8.0, accel]) * (1 + 1e-9)), found.max(axis=0)
     assert dt[40] >= 0.5 / 2.0  # (b at most at its limit, the tool still)
     ramp = speed / accel  # (0.4 s to full speed, over 4 cm)
@@ -369,7 +357,7 @@ def test_a_joint_turned_round_on_the_way_slows_the_path_around_it_only() -> None
     arc = k * 0.01
     speed, accel = 0.25, 0.5
     timed = time_along_path(names, states, arc, limits, speed_m_s=speed, accel_m_s2=accel)
-    found = _finite_difference_accelerations(np.column_stack([states, arc]), timed.times)
+    found = finite_difference_accelerations(np.column_stack([states, arc]), timed.times)
     assert np.all(found <= np.array([12.0, 12.0, accel]) * (1 + 1e-9)), found.max(axis=0)
     dt = np.diff(timed.times)
     # b turns round at state 60 (1 rad/s one way, then the other, at full speed): it

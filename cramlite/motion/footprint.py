@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -114,13 +114,8 @@ class OccupancyMap:
         out.obstacles = self.obstacles
         out.__dict__["_coarse_clearance"] = self._coarse_clearance
         blocked = self.blocked.copy()
-        nx, ny = blocked.shape
-        for x0, y0, x1, y1 in np.asarray(boxes, dtype=float).reshape(-1, 4).tolist():
-            i0, j0 = self._cell(x0 - self.margin, y0 - self.margin)
-            i1, j1 = self._cell(x1 + self.margin, y1 + self.margin)
-            if i1 < 0 or j1 < 0 or i0 >= nx or j0 >= ny:
-                continue
-            blocked[max(i0, 0):i1 + 1, max(j0, 0):j1 + 1] = True
+        for i0, i1, j0, j1 in self._box_cells(boxes, self.margin):
+            blocked[i0:i1 + 1, j0:j1 + 1] = True
         out.blocked = blocked
         return out
 
@@ -131,14 +126,21 @@ class OccupancyMap:
         f = COARSE_CELLS
         nx, ny = self.obstacles.shape
         out = np.zeros((-(-nx // f), -(-ny // f)), dtype=bool)
-        grow = reach + f * self.resolution * math.sqrt(2)
+        for i0, i1, j0, j1 in self._box_cells(boxes, reach + f * self.resolution *
+                                              math.sqrt(2)):
+            out[i0 // f:i1 // f + 1, j0 // f:j1 // f + 1] = True
+        return out
+
+    def _box_cells(self, boxes: np.ndarray, grow: float) -> Iterator[tuple[int, ...]]:
+        """For each xy box [x0, y0, x1, y1] grown by `grow` (m) that meets the map: the
+        first and last cell it covers along x and along y (i0, i1, j0, j1), within the
+        map's cells from below (a slice's end past the map is cut by the slice)."""
+        nx, ny = self.obstacles.shape
         for x0, y0, x1, y1 in np.asarray(boxes, dtype=float).reshape(-1, 4).tolist():
             i0, j0 = self._cell(x0 - grow, y0 - grow)
             i1, j1 = self._cell(x1 + grow, y1 + grow)
-            if i1 < 0 or j1 < 0 or i0 >= nx or j0 >= ny:
-                continue
-            out[max(i0, 0) // f:i1 // f + 1, max(j0, 0) // f:j1 // f + 1] = True
-        return out
+            if i1 >= 0 and j1 >= 0 and i0 < nx and j0 < ny:
+                yield max(i0, 0), i1, max(j0, 0), j1
 
     def coarse_cell(self, x: float, y: float) -> tuple[int, int]:
         """The coarse cell of a point (-1, -1 outside the map)."""
@@ -435,12 +437,12 @@ class FootprintChecker:
             pts = np.vstack(parts)
             # (how far they reach from the base's centre, with the margin)
             reach = float(np.hypot(*pts.T).max()) + pad
-            items = None
+            near, items = occupancy.near(reach), None  # (near: the kitchen's only)
             if len(boxes):
                 items = _ItemsNear(occupancy.near_boxes(boxes, reach + occupancy.margin),
                                    boxes, occupancy.margin, pts)
                 occupancy = self._with_boxes(occupancy, boxes)
-            self.carried_groups.append((pts, occupancy, occupancy.near(reach), items))
+            self.carried_groups.append((pts, occupancy, near, items))
 
     def _with_boxes(self, occupancy: OccupancyMap, boxes: np.ndarray) -> OccupancyMap:
         """`occupancy.with_boxes(boxes)`, kept while the items stand where they do (the

@@ -286,13 +286,14 @@ def limit_accelerations(steps: np.ndarray, dt: np.ndarray, accel: np.ndarray) ->
     dt = np.array(dt, dtype=float)
     steps = np.asarray(steps, dtype=float)
     accel = np.asarray(accel, dtype=float)
-    if not len(dt) or _junction_ratios(steps, dt, accel).max() <= 1.0 + 1e-9:
-        return dt
     timed = np.flatnonzero(dt > 0)
     if np.any(np.abs(np.delete(steps, timed, axis=0)) > 0):
         raise ValueError("limit_accelerations: a segment that moves needs time")
+    steps = steps[timed]  # (a state written twice is one state, as a trace check sees it)
+    if not len(timed) or _junction_ratios(steps, dt[timed], accel).max() <= 1.0 + 1e-9:
+        return dt
     given = dt[timed].tolist()
-    speed = (steps[timed] / dt[timed][:, None]).tolist()  # (each one's velocity as given)
+    speed = (steps / dt[timed][:, None]).tolist()  # (each one's velocity as given)
     share = [1.0] * len(timed)
     rest = [0.0] * steps.shape[1]
     limits = accel.tolist()
@@ -314,11 +315,12 @@ def limit_accelerations(steps: np.ndarray, dt: np.ndarray, accel: np.ndarray) ->
             share[k] = min(share[k], most(k, k + 1))
         if share == before:
             break
-    out = dt.copy()
-    out[timed] = np.array(given) / np.array(share)
-    worst = float(_junction_ratios(steps, out, accel).max())
+    timed_dt = np.array(given) / np.array(share)
+    worst = float(_junction_ratios(steps, timed_dt, accel).max())
     if worst > 1.0 + 1e-9:
-        out *= math.sqrt(worst) * (1 + 1e-12)
+        timed_dt *= math.sqrt(worst) * (1 + 1e-12)
+    out = dt.copy()
+    out[timed] = timed_dt
     return out
 
 
@@ -345,10 +347,10 @@ def _share_most(velocity: list[float], given: float, other_velocity: list[float]
 
 
 def _junction_ratios(steps: np.ndarray, dt: np.ndarray, accel: np.ndarray) -> np.ndarray:
-    """At each junction (before the first segment, between each two, after the last): the
-    largest change of speed over what the acceleration allows there (<= 1: kept)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        v = np.where(dt[:, None] > 0, steps / dt[:, None], 0.0)
+    """At each junction of segments that take time (before the first, between each two,
+    after the last): the largest change of speed over what the acceleration allows there
+    (<= 1: kept)."""
+    v = steps / dt[:, None]
     zero = np.zeros((1, steps.shape[1]))
     change = np.abs(np.diff(np.vstack([zero, v, zero]), axis=0))
     lengths = np.concatenate([[0.0], dt, [0.0]])

@@ -264,11 +264,7 @@ def _base_accelerations(trace: Trace):
     for k in np.flatnonzero(moving & (dt <= 1e-9)):
         yield Finding("base acceleration", "a jump of the base", math.inf,
                       limits.accel_m_s2, "m/s^2", float(t[k + 1]), int(k) + 3)
-    v = np.vstack([np.zeros(3), v, np.zeros(3)])
-    half = np.concatenate([[0.0], dt, [0.0]])
-    gap = (half[:-1] + half[1:]) / 2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a = np.where(gap[:, None] > 1e-9, np.diff(v, axis=0) / gap[:, None], 0.0)
+    a, _ = _from_rest_to_rest(v, dt)
     xy, yaw = np.hypot(a[:, 0], a[:, 1]), np.abs(a[:, 2])
     for values, limit, what, unit in ((xy, limits.accel_m_s2, "driving", "m/s^2"),
                                       (yaw, limits.turn_accel_rad_s2, "turning", "rad/s^2")):
@@ -277,6 +273,20 @@ def _base_accelerations(trace: Trace):
             line = int(min(k, len(states) - 1)) + 2
             yield Finding("base acceleration", what, round(float(values[k]), 2),
                           round(limit, 2), unit, float(t[min(k, len(t) - 1)]), line)
+
+
+def _from_rest_to_rest(v: np.ndarray, dt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Accelerations (steps + 1 x coordinates) at each junction of steps of velocity `v`
+    lasting `dt`, from rest before the first and to rest after the last: the change of
+    velocity over the time between the steps' middles (0 where that is no time); and that
+    time."""
+    rest = np.zeros((1, v.shape[1]))
+    lengths = np.concatenate([[0.0], dt, [0.0]])
+    gap = (lengths[:-1] + lengths[1:]) / 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(gap[:, None] > 1e-9, np.diff(np.vstack([rest, v, rest]), axis=0) /
+                     gap[:, None], 0.0)
+    return a, gap
 
 
 #: A trace's positions are written to 6 decimals: differencing them twice may be off by
@@ -326,14 +336,12 @@ def _joint_accelerations(trace: Trace):
     steps = np.flatnonzero(~still)  # (the state each step ends at: steps + 1)
     if not len(steps):
         return
-    v = dq[steps] / dt[steps, None]
-    v = np.vstack([np.zeros(len(columns)), v, np.zeros(len(columns))])
+    a, gap = _from_rest_to_rest(dq[steps] / dt[steps, None], dt[steps])
+    a = np.abs(a)
     lengths = np.concatenate([[0.0], dt[steps], [0.0]])
-    gap = (lengths[:-1] + lengths[1:]) / 2
     shorter = np.where(np.minimum(lengths[:-1], lengths[1:]) > 0,
                        np.minimum(lengths[:-1], lengths[1:]), np.maximum(lengths[:-1],
                                                                         lengths[1:]))
-    a = np.abs(np.diff(v, axis=0)) / gap[:, None]
     allowed = np.array(limits) * (1 + ACCEL_TOLERANCE) + (ROUNDING_M / (shorter * gap))[:, None]
     for k, j in zip(*np.nonzero(a > allowed), strict=True):
         # (between step k-1 and step k: at the state step k-1 ends at)
