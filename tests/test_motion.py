@@ -352,6 +352,37 @@ def test_footprints_checked_by_the_chunk_remember_what_one_by_one_would(
         assert chunks._known == alone._known
 
 
+def test_a_door_swept_on_one_map_answers_as_each_of_its_positions_does() -> None:
+    """The maps of c1's cupboard door at its stages of a swing, joined into one
+    (`OccupancyMap.union`: what an access pose's footprint is checked against), answer
+    every base pose as checking it on each map does, also where only a middle stage
+    blocks it; maps of other bounds are not joined."""
+    from cramlite.designators.context import occupancy_map
+    from cramlite.designators.storage import FOOTPRINT_STAGES
+
+    scene = PlanningScene(load_setup("c1"))
+    maps = []
+    for value in np.linspace(0.0, 2.3, FOOTPRINT_STAGES):
+        scene.set_world_joint("cupboard_door_joint", float(value))
+        maps.append(occupancy_map(scene))
+    joined = OccupancyMap.union(maps)
+    hinge = np.array(scene.link_bounds("cupboard_door")[0][:2])
+    each = [FootprintChecker(m) for m in maps]
+    union = FootprintChecker(joined)
+    rng = np.random.default_rng(8)
+    answers, only_middle = [], 0
+    for _ in range(2500):
+        x, y = hinge + rng.uniform(-1.2, 1.2, size=2)
+        yaw = rng.uniform(-math.pi, math.pi)
+        stages = [check.is_free(x, y, yaw) for check in each]
+        assert union.is_free(x, y, yaw) == all(stages), (x, y, yaw, stages)
+        answers.append(all(stages))
+        only_middle += stages[0] and stages[-1] and not all(stages)
+    assert 200 < sum(answers) < 2300 and only_middle > 20
+    other = OccupancyMap([("floor", (-1.0, -1.0, -0.01), (1.0, 1.0, 0.0))])
+    assert OccupancyMap.union([maps[0], other]) is None
+
+
 def test_the_convex_hull_is_the_counter_clockwise_corners_of_the_points() -> None:
     """convex_hull_2d on mesh-like point clouds (many points inside, duplicates, points
     along the edges): its corners are input points, every point lies within it, each

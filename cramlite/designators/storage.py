@@ -35,6 +35,7 @@ from cramlite.designators.grasps import Grasp, in_base_frame
 from cramlite.designators.locations import CostmapLocation, reaching_seed
 from cramlite.designators.motions import MoveArmJointsMotion, MoveGripperMotion, gripper_joints
 from cramlite.designators.tasks import ActionDesignator, recorded
+from cramlite.motion.footprint import OccupancyMap
 from cramlite.motion.ik import ARMS, ArmIK, IKOptions, arm_ik, arm_joint_names
 from cramlite.motion.trajectory import time_along_path, wrap_angle
 from cramlite.process_cache import ProcessCache
@@ -190,7 +191,7 @@ class AccessingLocation:
         for _, base, arm, _ in rings.candidates(ctx):
             if abs(wrap_angle(base[2] - facing)) > MAX_SQUINT_RAD:
                 continue
-            if not all(_footprint_free(ctx, stage, base) for stage in maps):
+            if not all(_footprint_free(ctx, swept, base) for swept in maps):
                 self.rejected["footprint"] += 1
                 continue
             if checks >= self.max_ik_checks:
@@ -201,11 +202,19 @@ class AccessingLocation:
                 yield access
 
     def _stage_maps(self, ctx: RobotContext) -> list:
-        out = []
-        for value in np.linspace(self.start, self.end, FOOTPRINT_STAGES):
-            with ctx.scene.world_joint_at(self.container.joint, float(value)):
-                out.append(occupancy_map(ctx.scene))
-        return out
+        """The kitchen's maps with the container at FOOTPRINT_STAGES places along the
+        stretch, as one map blocked wherever one of them is (where they can be joined:
+        one footprint check a base pose instead of one a stage, the same answers)."""
+        key = ("swept map", self.container.joint, round(self.start, 4), round(self.end, 4),
+               *ctx.scene.world_joint_positions().values())
+        if key not in ctx.scene.cache:
+            out = []
+            for value in np.linspace(self.start, self.end, FOOTPRINT_STAGES):
+                with ctx.scene.world_joint_at(self.container.joint, float(value)):
+                    out.append(occupancy_map(ctx.scene))
+            joined = OccupancyMap.union(out)
+            ctx.scene.cache[key] = out if joined is None else [joined]
+        return ctx.scene.cache[key]
 
     def reach_from(self, ctx: RobotContext, base: BasePose, arm: str,
                    path: HandlePath | None = None) -> AccessPose | None:

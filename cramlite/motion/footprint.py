@@ -119,6 +119,24 @@ class OccupancyMap:
         out.blocked = blocked
         return out
 
+    @staticmethod
+    def union(maps: Sequence[OccupancyMap]) -> OccupancyMap | None:
+        """One map blocked wherever one of `maps` is (of the same bounds, cells and
+        margin; None where they differ): a base pose is free on it exactly when it is free
+        on each of them (a pose's points are the same on every map; the clearance bounds
+        are the nearest of theirs), at the cost of one check (a drawer's or door's
+        positions along its swing, say)."""
+        first = maps[0]
+        if any((m.bounds, m.resolution, m.margin, m.obstacles.shape) !=
+               (first.bounds, first.resolution, first.margin, first.obstacles.shape)
+               for m in maps):
+            return None
+        out = object.__new__(OccupancyMap)
+        out.bounds, out.resolution, out.margin = first.bounds, first.resolution, first.margin
+        out.obstacles = np.logical_or.reduce([m.obstacles for m in maps])
+        out.blocked = np.logical_or.reduce([m.blocked for m in maps])
+        return out
+
     def near_boxes(self, boxes: np.ndarray, reach: float) -> np.ndarray:
         """Coarse cells (as `near`) from which one of these xy boxes [x0, y0, x1, y1] (K x
         4) may be within `reach` (m): each box grown by the reach and a coarse cell's
