@@ -88,7 +88,16 @@ class HandlePath:
 
 def handle_path(ctx: RobotContext, container: Container, start: float, end: float,
                 ) -> HandlePath:
-    scene = ctx.scene
+    """The handle's way from `start` to `end` (kept per world, by where every drawer and
+    door stands: a stretch is asked for at every attempt to open or close it)."""
+    key = ("handle path", container.name, start, end,
+           *ctx.scene.world_joint_positions().values())
+    if key not in ctx.scene.cache:
+        ctx.scene.cache[key] = _handle_path(ctx.scene, container, start, end)
+    return ctx.scene.cache[key]
+
+
+def _handle_path(scene, container: Container, start: float, end: float) -> HandlePath:
     with scene.world_joint_at(container.joint, end):
         far = _grasp_pose(scene, container)
     with scene.world_joint_at(container.joint, start):
