@@ -25,7 +25,7 @@ import numpy as np
 import pinocchio as pin
 
 from cramlite.designators.actions import NavigateAction, ParkArmsAction
-from cramlite.designators.context import RobotContext, occupancy_map
+from cramlite.designators.context import RobotContext, _joint_state, occupancy_map
 from cramlite.designators.failures import (
     ContainerManipulationFailed,
     ObjectNotFound,
@@ -215,7 +215,7 @@ class AccessingLocation:
         stretch, as one map blocked wherever one of them is (where they can be joined:
         one footprint check a base pose instead of one a stage, the same answers)."""
         key = ("swept map", self.container.joint, round(self.start, 4), round(self.end, 4),
-               *ctx.scene.world_joint_positions().values())
+               _joint_state(ctx.scene))  # (by what the maps themselves are kept by)
         if key not in ctx.scene.cache:
             out = []
             for value in np.linspace(self.start, self.end, FOOTPRINT_STAGES):

@@ -109,14 +109,11 @@ class OccupancyMap:
         furniture's disk), the same bounds and cells; its `near` is this map's (use
         `near_boxes` for the boxes). A few slices a box: items move, the kitchen's map
         (and its clearance) is drawn once."""
-        out = object.__new__(OccupancyMap)
-        out.bounds, out.resolution, out.margin = self.bounds, self.resolution, self.margin
-        out.obstacles = self.obstacles
-        out.__dict__["_coarse_clearance"] = self._coarse_clearance
         blocked = self.blocked.copy()
         for i0, i1, j0, j1 in self._box_cells(boxes, self.margin):
             blocked[i0:i1 + 1, j0:j1 + 1] = True
-        out.blocked = blocked
+        out = self._with_grids(self.obstacles, blocked)
+        out.__dict__["_coarse_clearance"] = self._coarse_clearance
         return out
 
     @staticmethod
@@ -131,10 +128,15 @@ class OccupancyMap:
                (first.bounds, first.resolution, first.margin, first.obstacles.shape)
                for m in maps):
             return None
+        return first._with_grids(np.logical_or.reduce([m.obstacles for m in maps]),
+                                 np.logical_or.reduce([m.blocked for m in maps]))
+
+    def _with_grids(self, obstacles: np.ndarray, blocked: np.ndarray) -> OccupancyMap:
+        """A map of this one's bounds, cells and margin with these grids (its clearance
+        worked out from `obstacles` when first asked for)."""
         out = object.__new__(OccupancyMap)
-        out.bounds, out.resolution, out.margin = first.bounds, first.resolution, first.margin
-        out.obstacles = np.logical_or.reduce([m.obstacles for m in maps])
-        out.blocked = np.logical_or.reduce([m.blocked for m in maps])
+        out.bounds, out.resolution, out.margin = self.bounds, self.resolution, self.margin
+        out.obstacles, out.blocked = obstacles, blocked
         return out
 
     def near_boxes(self, boxes: np.ndarray, reach: float) -> np.ndarray:

@@ -339,9 +339,9 @@ def _joint_accelerations(trace: Trace):
     a, gap = _from_rest_to_rest(dq[steps] / dt[steps, None], dt[steps])
     a = np.abs(a)
     lengths = np.concatenate([[0.0], dt[steps], [0.0]])
-    shorter = np.where(np.minimum(lengths[:-1], lengths[1:]) > 0,
-                       np.minimum(lengths[:-1], lengths[1:]), np.maximum(lengths[:-1],
-                                                                        lengths[1:]))
+    # (the shorter of the two steps at a junction; the one step at either end)
+    shorter = np.minimum(lengths[:-1], lengths[1:])
+    shorter = np.where(shorter > 0, shorter, np.maximum(lengths[:-1], lengths[1:]))
     allowed = np.array(limits) * (1 + ACCEL_TOLERANCE) + (ROUNDING_M / (shorter * gap))[:, None]
     for k, j in zip(*np.nonzero(a > allowed), strict=True):
         # (between step k-1 and step k: at the state step k-1 ends at)
