@@ -100,18 +100,64 @@ def test_costmap_location_offers_checked_reachable_poses(world) -> None:
 
 def deepest_contacts(world, allowed: set[str], body: int | None = None) -> dict[str, float]:
     """Penetration depth of the robot (or another body) into the kitchen and the items but
-    `allowed` (an independent, whole-body check with PyBullet)."""
+    `allowed` (an independent, whole-body check with PyBullet). PyBullet gives a robot's
+    mesh link its convex hull, which fills the mesh's hollows (the PR2's forearm's hull
+    reaches 2.4 cm below the mesh): where it finds a robot link more than 1 cm into the
+    kitchen's boxes, the depth is that of the link's own mesh (coal, exact), as far as it
+    is more than 1 cm."""
     body = world.robot.body if body is None else body
     out = {}
     others = {"kitchen": world.environment} | {n: o.body for n, o in world.objects.items()
                                                if n not in allowed and o.body != body}
     for name, other in others.items():
         points = p.getClosestPoints(body, other, 0.0, physicsClientId=world.client)
-        out[name] = max((-pt[8] for pt in points), default=0.0)
+        depths = []
         for pt in points:
-            if -pt[8] > 0.01:
-                print("DEEP", name, pt[3], pt[4], -pt[8], pt[5])
+            depth = -pt[8]
+            if depth > 0.01 and body == world.robot.body and other == world.environment:
+                depth = 0.01 if not _mesh_deeper_than(world, pt[3], pt[4], 0.01) else depth
+            if depth > 0.01:
+                print("DEEP", name, pt[3], pt[4], depth, pt[5])
+            depths.append(depth)
+        out[name] = max(depths, default=0.0)
     return out
+
+
+def _mesh_deeper_than(world, robot_link: int, kitchen_link: int, depth_m: float) -> bool:
+    """Is a robot link's own collision mesh (not PyBullet's convex hull of it) more than
+    `depth_m` inside one of a kitchen link's boxes? (A box shrunk by `depth_m` on every
+    side that the exact mesh meets: coal.)"""
+    import coal
+    import pinocchio as pin
+
+    from cramlite.scene.models import pr2_model
+
+    client = world.client
+    name = p.getJointInfo(world.robot.body, robot_link, physicsClientId=client)[12].decode()
+    frame = p.getLinkState(world.robot.body, robot_link, computeForwardKinematics=True,
+                           physicsClientId=client)[4:6]  # (the URDF link's own frame)
+    link = pin.XYZQUATToSE3(np.array([*frame[0], *frame[1]]))
+    kitchen = p.getLinkState(world.environment, kitchen_link, physicsClientId=client)[0:2]
+    model = pr2_model()
+    meshes = [go for go in model.geometry_model.geometryObjects
+              if model.model.frames[go.parentFrame].name == name]
+    assert meshes, name
+    for shape in p.getCollisionShapeData(world.environment, kitchen_link,
+                                         physicsClientId=client):
+        assert shape[2] == p.GEOM_BOX, shape  # (the kitchen's furniture: boxes)
+        centre = p.multiplyTransforms(*kitchen, shape[5], shape[6])
+        box = coal.Box(*(max(1e-6, size - 2 * depth_m) for size in shape[3]))
+        placed = pin.XYZQUATToSE3(np.array([*centre[0], *centre[1]]))
+        for go in meshes:
+            in_link = model.model.frames[go.parentFrame].placement.actInv(go.placement)
+            mesh = link * in_link
+            result = coal.CollisionResult()
+            coal.collide(go.geometry, coal.Transform3s(mesh.rotation, mesh.translation), box,
+                         coal.Transform3s(placed.rotation, placed.translation),
+                         coal.CollisionRequest(), result)
+            if result.isCollision():
+                return True
+    return False
 
 
 def test_costmap_location_is_empty_for_an_unreachable_point(world) -> None:

@@ -406,7 +406,9 @@ def test_success_needs_every_item_at_its_target(monkeypatch) -> None:
     from cramlite import plans
 
     def all_but_the_milk(ctx, setup, strategy):
-        goals = {s.name: {"target": s.target.xyz} for s in setup.items if s.name != "milk"}
+        # (as the set-table plan asks, the yaw too: without it an item may stand any way)
+        goals = {s.name: {"target": s.target.xyz, "target_yaw": s.target.yaw}
+                 for s in setup.items if s.name != "milk"}
         return fetch_in_strategy_order(ctx, setup, strategy, goals, PlanReport())
 
     monkeypatch.setitem(plans.PLANS, "set-table-but-milk", all_but_the_milk)

@@ -90,11 +90,14 @@ def test_a_jump_of_the_base_is_found(trace) -> None:
 
 
 def _moving_arm_state(trace, joint: str) -> int:
-    """A state in the middle of a motion of `joint` (moving into it and out of it)."""
+    """A state in the middle of a motion of `joint` (moving into it and out of it), its
+    hand holding nothing (pushed aside, a hand would also move its fingers in the item)."""
     k = trace.header["joints"].index(joint)
     q = [s["q"][k] for s in trace.states]
+    arm = {"r": "right", "l": "left"}[joint[0]]
     moving = [i for i in range(1, len(q) - 1)
-              if q[i - 1] != q[i] != q[i + 1] and trace.states[i]["t"] > trace.states[i - 1]["t"]]
+              if q[i - 1] != q[i] != q[i + 1] and trace.states[i]["t"] > trace.states[i - 1]["t"]
+              and arm not in trace.states[i]["held"].values()]
     return moving[len(moving) // 2]
 
 

@@ -13,11 +13,13 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
+from cramlite.motion.closed_form_ik import ClosedFormArmIK, arm_geometry
 from cramlite.motion.trajectory import wrap_angle
 from cramlite.process_cache import ProcessCache
 from cramlite.scene.models import pr2_model
@@ -43,6 +45,10 @@ def tool_frame(arm: str) -> str:
 
 
 EYE6 = np.eye(6)
+#: Torso heights the closed form tries when the torso is free and the wanted one fails.
+TORSO_HEIGHTS = 32
+#: Targets whose closed-form solutions an arm's solver remembers (~4 KB each).
+CLOSED_FORM_TARGETS = 5_000
 #: Descents from seeded starts an arm's solver remembers (~1 KB each).
 SEEDED_DESCENTS = 20_000
 
@@ -66,6 +72,10 @@ class IKOptions:
     #: A solution with an arm joint closer than this to a limit is kept only if no start
     #: gives a better one (one away from the limits leaves room to approach and lift).
     limit_margin_rad: float = 0.1
+    #: Where the seed's descent fails (or there is no seed), take the closed-form solution
+    #: nearest the seed (`cramlite.motion.closed_form_ik`) instead of descents from random
+    #: starts. (A model not shaped as a PR2 arm always uses the random starts.)
+    closed_form: bool = True
 
 
 @dataclass(frozen=True)
@@ -107,6 +117,12 @@ class ArmIK:
             jid = self.model.getJointId(TORSO_JOINT)
             self._torso = (int(self.model.idx_qs[jid]), int(self.model.idx_vs[jid]))
         self._shoulder, self._reach, self._wrist, self._wrist_reach = self._reach_bounds()
+        geometry = (arm_geometry(self.model, arm_prefix(arm), self.frame_id, TORSO_JOINT)
+                    if self.options.closed_form else None)
+        self._closed_form = ClosedFormArmIK(geometry) if geometry is not None else None
+        #: The closed form's solutions by target and torso heights, kept for the process
+        #: (a pure function of them; each trial of a setup asks the ones the last asked).
+        self._solved: ProcessCache[np.ndarray] = ProcessCache(CLOSED_FORM_TARGETS)
         self._damped_eye = self.options.damping * EYE6  # (the damping term of every step)
         #: Descents from seeded starts (see `_descend_from_seed`), kept for the process.
         self._seeded: ProcessCache[IKSolution | None] = ProcessCache(SEEDED_DESCENTS)
@@ -233,6 +249,11 @@ class ArmIK:
         torso = None if fixed_torso_m is None or self._torso is None else self._torso
         fallback = None
         for attempt in range(restarts + 1):  # (random starts drawn only when needed)
+            if attempt == (1 if seed_joints else 0) and self._closed_form is not None:
+                # (the seed's descent failed or there is none: the closed form instead of
+                # descents from random starts)
+                return self._from_closed_form(target, rng, seed_joints, preferred_torso_m,
+                                              fixed_torso_m, near_limits_ok) or fallback
             q0 = self.to_q(seed_joints) if seed_joints and attempt == 0 \
                 else self.random_q(rng)
             if torso is not None:
@@ -252,6 +273,95 @@ class ArmIK:
                 return result
             fallback = fallback or result
         return fallback
+
+    def _from_closed_form(self, target: pin.SE3, rng: np.random.Generator,
+                          seed_joints: dict[str, float] | None,
+                          preferred_torso_m: float | None, fixed_torso_m: float | None,
+                          near_limits_ok: bool) -> IKSolution | None:
+        """The closed-form solution nearest the seed, one clear of the joint limits if
+        there is one (unless `near_limits_ok`); without a seed, nearest a configuration
+        drawn at random (as a random start would be: asked again, another solution); the
+        torso at `fixed_torso_m`, else at the preferred height if that reaches, else at
+        the nearest height that does."""
+        solver = self._closed_form
+        assert solver is not None
+        names = self.joint_names
+        seed = self._reference(seed_joints if seed_joints else self.from_q(self.random_q(rng)))
+        if self._torso is None:
+            heights = [[0.0]]
+        elif fixed_torso_m is not None:
+            heights = [[fixed_torso_m]]
+        else:
+            lo, hi = solver.geometry.torso or (0.0, 0.0)
+            wanted = preferred_torso_m if preferred_torso_m is not None else seed[0]
+            wanted = min(max(wanted, lo), hi)
+            grid = np.linspace(lo, hi, TORSO_HEIGHTS)
+            heights = [[wanted], grid[np.argsort(np.abs(grid - wanted), kind="stable")]]
+        for torsos in heights:
+            found = self._all_solutions(target, torsos)
+            if len(found):
+                break
+        else:
+            return None
+        if self._torso is None:
+            found = found[:, 1:]
+        score = self._distances(found, seed)
+        if not near_limits_ok:
+            score = score + 1e6 * ~self._clear_rows(found)
+        best = found[int(np.argmin(score))]
+        joints = {name: float(v) for name, v in zip(names, best, strict=True)}
+        q0 = self.to_q(joints)
+        # (exact to rounding: the descent confirms it at its first step, or polishes it)
+        return self._descend(q0, target, None, fixed_torso=self._torso is not None)
+
+    def _all_solutions(self, target: pin.SE3, torsos: Sequence[float]) -> np.ndarray:
+        """`ClosedFormArmIK.solutions`, remembered (read-only rows)."""
+        solver = self._closed_form
+        assert solver is not None
+        heights = np.asarray(torsos, dtype=float)
+
+        def solve() -> np.ndarray:
+            rows = solver.solutions(target.rotation, target.translation, heights)
+            rows.flags.writeable = False
+            return rows
+
+        key = (target.homogeneous.tobytes(), heights.tobytes())
+        return self._solved.get_or_compute(key, solve)
+
+    def _reference(self, seed_joints: dict[str, float]) -> np.ndarray:
+        """The seed as a row of joint values (the middle of each joint's range where it
+        names no value; 0 for a continuous joint)."""
+        row = []
+        for name, i, cont in zip(self.joint_names, self._idx_q, self._continuous,
+                                 strict=True):
+            if name in seed_joints:
+                row.append(float(seed_joints[name]))
+            elif cont:
+                row.append(0.0)
+            else:
+                row.append(0.5 * (self.model.lowerPositionLimit[i] +
+                                  self.model.upperPositionLimit[i]))
+        return np.array(row)
+
+    def _distances(self, rows: np.ndarray, seed: np.ndarray) -> np.ndarray:
+        """Squared joint-space distances of configurations (N x joints) from the seed (a
+        continuous joint the short way round; the torso in decimetres)."""
+        diff = rows - seed
+        cont = np.asarray(self._continuous)
+        diff[:, cont] = (diff[:, cont] + np.pi) % (2 * np.pi) - np.pi
+        if self._torso is not None:
+            diff[:, 0] *= 10.0
+        return np.einsum("ij,ij->i", diff, diff)
+
+    def _clear_rows(self, rows: np.ndarray) -> np.ndarray:
+        """`_clear_of_limits` of each configuration (N x joints)."""
+        margin = self.options.limit_margin_rad
+        ok = np.ones(len(rows), dtype=bool)
+        columns = {i: k for k, i in enumerate(self._idx_q)}
+        for i, lo, hi in self._arm_bounded:
+            column = rows[:, columns[i]]
+            ok &= (column >= lo + margin) & (column <= hi - margin)
+        return ok
 
     def _descend_from_seed(self, q0: np.ndarray, target: pin.SE3,
                            preferred_torso_m: float | None = None,
