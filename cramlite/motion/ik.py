@@ -1,11 +1,16 @@
 """Arm inverse kinematics for the PR2 with Pinocchio.
 
-Damped least squares on the SE(3) log error (Pinocchio's standard 6D IK), joint limits
-enforced by clamping after each step, and a few random restarts. The reduced model
-(torso + one arm, everything else locked) is built once per arm and process, never per
-call. The torso height is part of the solution: with it the arm is redundant (8 joints
-for a 6D pose), and the null space pulls the torso toward a preferred height, so
-solutions keep the torso up (and the other, parked arm clear of tables).
+From a seed (the last solution, an arm reaching forward): damped least squares on the
+SE(3) log error (Pinocchio's standard 6D IK), joint limits enforced by clamping after
+each step; it keeps nearby targets' solutions near each other (a handle followed, a
+pre-grasp beside its grasp). The torso height is part of the solution: with it the arm
+is redundant (8 joints for a 6D pose), and the null space pulls the torso toward a
+preferred height, so solutions keep the torso up (and the other, parked arm clear of
+tables). Where that descent fails, or there is no seed, the arm's closed form
+(`cramlite.motion.closed_form_ik`) gives the solution nearest the seed, or says at once
+that there is none; a model not shaped as a PR2 arm gets descents from random starts
+instead. The reduced model (torso + one arm, everything else locked) is built once per
+arm and process, never per call.
 """
 
 from __future__ import annotations
