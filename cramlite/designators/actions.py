@@ -314,7 +314,11 @@ class TransportAction(ActionDesignator):
     """Fetch an object and put it at a target (or on a surface): navigate, pick up,
     navigate, place; each step falls through to the next candidate on failure. If the
     hand that took it cannot put it down, it is put back and the other hand (of `arms`)
-    carries it. Returns where the object came to rest."""
+    carries it. A drawer or cupboard it is stored in is opened first and closed once it
+    is out; one its target is in is opened first too (both hands free), or, for an
+    object taken out of another, with the free hand (if that cannot, the object is put
+    down, the container opened and the object fetched again). Returns where the object
+    came to rest."""
 
     object: ObjectDesignator | ObjectDesignatorDescription | str  #: what to carry
     target: Vec3 | None = None  #: where its bottom centre goes (or give `surface`)
@@ -349,6 +353,12 @@ class TransportAction(ActionDesignator):
         if destination is not None and is_open(ctx, destination):
             target = _at(ctx, destination, local)
         origin, _ = obj.pose(ctx)
+        if destination is not None and not is_open(ctx, destination) and source is None:
+            # a goal in a closed drawer or cupboard, the item out in the open: open it first,
+            # with both hands free (with one hand full, the free one is the one the pick
+            # left, and often it cannot: the item was put back and fetched again)
+            OpenAction(destination.name).perform(ctx)
+            target = _at(ctx, destination, local)
         closed = destination if destination is not None and not is_open(ctx, destination) \
             else None
         try:
