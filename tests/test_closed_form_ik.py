@@ -180,3 +180,64 @@ def test_remembered_solutions_answer_as_solving_afresh_does() -> None:
                     with pytest.raises(ValueError):
                         kept[0, 0] = 1.0
     assert len(remembering._solved) == len(targets) * 3
+
+
+@pytest.mark.parametrize("arm", ["right", "left"])
+def test_a_straight_wrist_and_an_elbow_at_the_edge_of_reach_are_solved(arm: str) -> None:
+    """A wrist bent by nothing (its rolls add up; arccos alone cannot tell 1e-8 rad from
+    0, and the rolls would follow rounding noise) and an elbow within 0.001-0.01 rad of
+    straight (the pose at the edge of the arm's reach, which only pans near the one that
+    turns the shoulder toward it reach): every row exact, and one found."""
+    ik, solver = _solver(arm)
+    rng = np.random.default_rng(21)
+    for k in range(40):
+        row = np.array([ik.from_q(ik.random_q(rng))[n] for n in ik.joint_names])
+        row[1] = solver.pans[(k * 37) % len(solver.pans)]  # (the pan on the grid)
+        row[6] = [0.0, -1e-12, -1e-10][k % 3]  # a straight wrist
+        row[4] = min(row[4], -0.3)
+        if k % 2:  # and an elbow at the edge of reach, the pan between two of the grid's
+            row[4] = [-0.001, -0.005, -0.01][k % 3]
+            row[6] = -0.5
+            row[1] = min(row[1] + PAN_STEP_RAD / 2, solver.pans[-2])
+        target = ik.forward(_joints(ik, row))
+        found = solver.solutions(target.rotation, target.translation, [row[0]])
+        assert len(found), row
+        for each in found[::3]:
+            reached = ik.forward(_joints(ik, each))
+            assert np.linalg.norm(reached.translation - target.translation) < 1e-9
+            assert np.linalg.norm(pin.log3(reached.rotation.T @ target.rotation)) < 1e-9
+
+
+def test_with_the_torso_free_the_nearest_height_that_reaches_is_taken() -> None:
+    ik, solver = _solver("right")
+    solving = ArmIK("right")
+    solving._descend_from_seed = lambda *args, **kwargs: None  # (the seed's descent fails)
+    grid = np.linspace(0.0, 0.31, 32)
+    rng = np.random.default_rng(3)
+    checked = 0
+    while checked < 20:
+        row = np.array([ik.from_q(ik.random_q(rng))[n] for n in ik.joint_names])
+        target = ik.forward(_joints(ik, row))
+        if len(solver.solutions(target.rotation, target.translation, [0.25])):
+            continue  # (reached at the preferred height: that height)
+        everywhere = solver.solutions(target.rotation, target.translation, grid)
+        clear = solving._clear_rows(everywhere)
+        if not clear.any():
+            continue
+        checked += 1
+        got = solving.solve(target, rng, ik.from_q(ik.random_q(rng)), preferred_torso_m=0.25)
+        assert got is not None
+        nearest = np.abs(everywhere[clear, 0] - 0.25).min()
+        assert abs(abs(got.joints[TORSO_JOINT] - 0.25) - nearest) < 1e-9
+
+
+def test_a_fixed_torso_height_beyond_its_range_is_taken_as_its_limit() -> None:
+    """As a descent clamps it: the closed form solves at the limit."""
+    ik = arm_ik("right")
+    solving = ArmIK("right")
+    solving._descend_from_seed = lambda *args, **kwargs: None
+    rng = np.random.default_rng(6)
+    for height, limit in ((0.35, 0.31), (0.31 + 5e-17, 0.31), (-0.03, 0.0)):
+        row = {**ik.from_q(ik.random_q(rng)), TORSO_JOINT: limit}
+        got = solving.solve(ik.forward(row), rng, row, fixed_torso_m=height)
+        assert got is not None and got.joints[TORSO_JOINT] == limit

@@ -32,9 +32,12 @@ CHAIN = (("shoulder_pan_joint", 2), ("shoulder_lift_joint", 1),
          ("upper_arm_roll_joint", 0), ("elbow_flex_joint", 1), ("forearm_roll_joint", 0),
          ("wrist_flex_joint", 1), ("wrist_roll_joint", 0))
 #: Shoulder pan angles tried, one every this many radians (0.5 degrees: at the PR2's
-#: longest reach of ~0.82 m a step moves the wrist 7 mm; a target reachable only within a
-#: narrower span of pan, at a joint limit or with the upper arm rolled a quarter turn,
-#: may find no solution on the grid. 0.25 degrees took a third longer a solve.)
+#: longest reach of ~0.82 m a step moves the wrist 7 mm), and the pan that turns the
+#: shoulder toward the wrist (a pose at the edge of reach). A target reachable only within
+#: a narrower span of pan, where a joint is at its limit, may find no solution; with the
+#: upper arm rolled a quarter turn the roll changes fast with the pan, and the solution
+#: nearest a configuration may be a tenth of a radian from it. (0.25 degrees took a third
+#: longer a solve.)
 PAN_STEP_RAD = math.radians(0.5)
 
 
@@ -125,7 +128,9 @@ class ClosedFormArmIK:
                   torsos: np.ndarray | list[float]) -> np.ndarray:
         """N x 8 configurations within the joint limits, for each torso height given (in
         that order), pans ascending; the continuous joints (forearm and wrist roll) in
-        (-pi, pi]."""
+        [-pi, pi]. Besides the grid, the pan that turns the shoulder toward the wrist's
+        centre (where the elbow bends most: a pose at the edge of the arm's reach, the
+        elbow nearly straight, may be reached only near it)."""
         g = self.geometry
         rotation = np.asarray(rotation, dtype=float)
         translation = np.asarray(translation, dtype=float)
@@ -136,10 +141,14 @@ class ClosedFormArmIK:
         dx = wrist[0] - g.pan_origin[0]
         dy = wrist[1] - g.pan_origin[1]
         dz = wrist[2] - g.pan_origin[2] - torsos  # T
-        c, s = self._cos, self._sin
+        pans, c, s = self.pans, self._cos, self._sin
+        toward = math.atan2(dy, dx)
+        if g.pan[0] <= toward <= g.pan[1]:
+            pans = np.append(pans, toward)
+            c, s = np.append(c, math.cos(toward)), np.append(s, math.sin(toward))
         wx = (c * dx + s * dy) - g.shoulder_m  # P
         wy = -s * dx + c * dy  # P
-        wz = np.broadcast_to(dz[:, None], (len(torsos), len(self.pans)))
+        wz = np.broadcast_to(dz[:, None], (len(torsos), len(pans)))
         wx = np.broadcast_to(wx, wz.shape)
         wy = np.broadcast_to(wy, wz.shape)
         a, b = g.upper_arm_m, g.forearm_m
@@ -176,7 +185,7 @@ class ClosedFormArmIK:
         ti, pi_, roll, lift, e = ti[keep], pi_[keep], roll[keep], lift[keep], e[keep]
         if not len(ti):
             return np.zeros((0, 8))
-        pan = self.pans[pi_]
+        pan = pans[pi_]
         # the forearm's frame, Rz(pan) Ry(lift) Rx(roll) Ry(elbow), column by column (N x 3
         # each), and the rotation left for the wrist, Rx(forearm roll) Ry(flex) Rx(wrist
         # roll) = frame^T rotation: its entries are the columns' dot products with the
@@ -192,12 +201,21 @@ class ClosedFormArmIK:
         u0 = a0 * ce[:, None] - b2 * se[:, None]  # ... Ry
         u2 = a0 * se[:, None] + b2 * ce[:, None]
         m = np.stack([u0 @ rotation, b1 @ rotation, u2 @ rotation], axis=1)  # N x 3 x 3
-        flex = -np.arccos(np.clip(m[:, 0, 0], -1.0, 1.0))
+        # (the flex from both its cosine and its sine: arccos alone cannot tell a wrist
+        # bent by less than 1.5e-8 rad from a straight one, and the rolls would follow
+        # rounding noise)
+        bend = np.hypot(m[:, 1, 0], m[:, 2, 0])
+        flex = -np.arctan2(bend, m[:, 0, 0])
         keep = (flex >= g.flex[0]) & (flex <= g.flex[1])
-        straight = np.abs(np.sin(flex)) < 1e-9  # (the rolls add up: all in the wrist's)
+        straight = bend < 1e-12  # (the rolls add up: all in the wrist's)
         forearm_roll = np.where(straight, 0.0, np.arctan2(-m[:, 1, 0], m[:, 2, 0]))
-        wrist_roll = np.where(straight, np.arctan2(m[:, 2, 1], m[:, 1, 1]),
-                              np.arctan2(-m[:, 0, 1], -m[:, 0, 2]))
+        # the wrist's roll from what the forearm's roll and the flex leave, Rx(wrist roll) =
+        # Ry(flex)^T Rx(forearm roll)^T m (its own entries of m would give it with an
+        # error of its own, which a nearly straight wrist does not hide)
+        ca, sa = np.cos(forearm_roll), np.sin(forearm_roll)
+        cb, sb = np.cos(flex), np.sin(flex)
+        wrist_roll = np.arctan2(sb * m[:, 0, 1] + cb * (ca * m[:, 2, 1] - sa * m[:, 1, 1]),
+                                ca * m[:, 1, 1] + sa * m[:, 2, 1])
         out = np.column_stack([torsos[ti], pan, lift, roll, e, forearm_roll, flex,
                                wrist_roll])[keep]
         order = np.lexsort((out[:, 1], ti[keep]))  # by torso as given, then pan

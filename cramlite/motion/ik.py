@@ -79,7 +79,8 @@ class IKOptions:
     limit_margin_rad: float = 0.1
     #: Where the seed's descent fails (or there is no seed), take the closed-form solution
     #: nearest the seed (`cramlite.motion.closed_form_ik`) instead of descents from random
-    #: starts. (A model not shaped as a PR2 arm always uses the random starts.)
+    #: starts; a solve asked for no restarts (`restarts=0`) with a seed is its descent
+    #: alone, as before. (A model not shaped as a PR2 arm always uses the random starts.)
     closed_form: bool = True
 
 
@@ -287,19 +288,20 @@ class ArmIK:
         there is one (unless `near_limits_ok`); without a seed, nearest a configuration
         drawn at random (as a random start would be: asked again, another solution); the
         torso at `fixed_torso_m`, else at the preferred height if that reaches, else at
-        the nearest height that does."""
+        the nearest height that does (of those with a solution clear of the limits, if
+        any), both within the torso's range (as a descent clamps it)."""
         solver = self._closed_form
         assert solver is not None
         names = self.joint_names
         seed = self._reference(seed_joints if seed_joints else self.from_q(self.random_q(rng)))
+        lo, hi = solver.geometry.torso or (0.0, 0.0)
+        wanted = fixed_torso_m if fixed_torso_m is not None else preferred_torso_m
+        wanted = min(max(seed[0] if wanted is None else wanted, lo), hi)
         if self._torso is None:
             heights = [[0.0]]
         elif fixed_torso_m is not None:
-            heights = [[fixed_torso_m]]
+            heights = [[wanted]]
         else:
-            lo, hi = solver.geometry.torso or (0.0, 0.0)
-            wanted = preferred_torso_m if preferred_torso_m is not None else seed[0]
-            wanted = min(max(wanted, lo), hi)
             grid = np.linspace(lo, hi, TORSO_HEIGHTS)
             heights = [[wanted], grid[np.argsort(np.abs(grid - wanted), kind="stable")]]
         for torsos in heights:
@@ -310,10 +312,13 @@ class ArmIK:
             return None
         if self._torso is None:
             found = found[:, 1:]
-        score = self._distances(found, seed)
         if not near_limits_ok:
-            score = score + 1e6 * ~self._clear_rows(found)
-        best = found[int(np.argmin(score))]
+            clear = self._clear_rows(found)
+            found = found[clear] if clear.any() else found
+        if self._torso is not None:  # (the torso moves at 1.3 cm/s: the nearest height)
+            off = np.abs(found[:, 0] - wanted)
+            found = found[off <= off.min() + 1e-12]
+        best = found[int(np.argmin(self._distances(found, seed)))]
         joints = {name: float(v) for name, v in zip(names, best, strict=True)}
         q0 = self.to_q(joints)
         # (exact to rounding: the descent confirms it at its first step, or polishes it)
