@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cramlite.motion.trajectory import MAX_BASE_STEP_M, MAX_BASE_TURN_RAD
+from cramlite.motion.trajectory import MAX_BASE_STEP_M, MAX_BASE_TURN_RAD, wrap_angle
 
 #: A turn of the path's direction by more than this is a cusp: the base stops there.
 CUSP_DEG = 120.0
@@ -363,5 +363,5 @@ def limits_decel(limits: BaseLimits, q1: Sequence[float], scale: float) -> float
 
 def _unscaled(z: np.ndarray, scale: float) -> np.ndarray:
     z = np.atleast_2d(z)
-    yaw = (z[:, 2] / scale + math.pi) % (2 * math.pi) - math.pi
+    yaw = wrap_angle(z[:, 2] / scale)
     return np.column_stack([z[:, 0], z[:, 1], yaw])

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from cramlite.motion.base_timing import BaseLimits
-from cramlite.motion.trajectory import BaseTrajectory, JointLimits, JointTrajectory
+from cramlite.motion.trajectory import BaseTrajectory, JointLimits, JointTrajectory, wrap_angle
 
 #: Spacing of the braking motion's states (s).
 BRAKE_STEP_S = 0.02
@@ -112,5 +112,5 @@ def brake_base_trajectory(trajectory: BaseTrajectory, k: int,
     if result is None:
         return trajectory
     positions, times, _ = result
-    positions[:, 2] = (positions[:, 2] + np.pi) % (2 * np.pi) - np.pi
+    positions[:, 2] = wrap_angle(positions[:, 2])
     return BaseTrajectory(positions, times)

@@ -15,7 +15,7 @@ form: the damped least-squares descent of `cramlite.motion.ik` needs random rest
 most of which fail (72 % of its steps went into descents that failed), where this
 answers whether a target can be reached, and with which configurations, in one pass. The
 geometry is read from the robot's model and checked to have this shape; a model of
-another shape gets no closed-form solver (`closed_form_solver` returns None).
+another shape gets no closed-form solver (`arm_geometry` returns None).
 """
 
 from __future__ import annotations
@@ -25,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+
+from cramlite.motion.trajectory import wrap_angle
 
 #: The PR2 arm's joints in order, with the axis each turns about (x, y, z: 0, 1, 2) and
 #: the offset from the joint before, along x, that makes the chain this solver knows.
@@ -180,7 +182,7 @@ class ClosedFormArmIK:
         fxr, fzr = fx[ti, pi_], fz[ti, pi_]
         cz = fzr * np.cos(roll)
         lift = np.arctan2(cz, fxr) - np.arctan2(wz[ti, pi_], wx[ti, pi_])
-        lift = (lift + math.pi) % (2 * math.pi) - math.pi
+        lift = wrap_angle(lift)
         keep = (lift >= g.lift[0]) & (lift <= g.lift[1])
         ti, pi_, roll, lift, e = ti[keep], pi_[keep], roll[keep], lift[keep], e[keep]
         if not len(ti):

@@ -358,7 +358,7 @@ class ArmIK:
         continuous joint the short way round; the torso in decimetres)."""
         diff = rows - seed
         cont = np.asarray(self._continuous)
-        diff[:, cont] = (diff[:, cont] + np.pi) % (2 * np.pi) - np.pi
+        diff[:, cont] = wrap_angle(diff[:, cont])
         if self._torso is not None:
             diff[:, 0] *= 10.0
         return np.einsum("ij,ij->i", diff, diff)

@@ -35,8 +35,8 @@ MAX_BASE_TURN_RAD = 0.05
 ACCELERATION_TIME_S = 0.25
 
 
-def wrap_angle(a: float) -> float:
-    """Into [-pi, pi)."""
+def wrap_angle(a: float | np.ndarray) -> float | np.ndarray:
+    """Into [-pi, pi) (each of an array's angles, elementwise)."""
     return (a + math.pi) % (2 * math.pi) - math.pi
 
 
