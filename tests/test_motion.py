@@ -12,6 +12,7 @@ import pinocchio as pin
 import pytest
 
 from cramlite.motion import BaseMotionPlanner, FootprintChecker, OccupancyMap, arm_ik
+from cramlite.motion.ik import ArmIK
 from cramlite.scene import PlanningScene
 from cramlite.world import load_setup
 
@@ -56,6 +57,25 @@ def test_reach_test_never_refuses_a_reachable_target(arm: str) -> None:
         target = ik.forward(ik.from_q(q))
         assert not ik.out_of_reach(target, fixed_torso_m=float(q[torso]))
         assert not ik.out_of_reach(target)
+
+
+def test_the_reach_is_the_stretched_arm_and_sampled_where_the_neutral_arm_is_bent() -> None:
+    """The PR2's arm at zero is stretched straight out: the farthest any configuration
+    gets, taken without sampling. A model whose arm is bent at zero is sampled."""
+    ik = ArmIK("right")  # (its own model: changed below)
+    _, reach, _, wrist_reach = ik._reach_bounds()
+    assert reach == pytest.approx(0.1 + 0.4 + 0.321 + 0.18 + 0.02, abs=1e-9)
+    assert wrist_reach == pytest.approx(0.1 + 0.4 + 0.321 + 0.02, abs=1e-9)
+    elbow = ik.model.getJointId("r_elbow_flex_joint")
+    placement = ik.model.jointPlacements[elbow]
+    ik.model.jointPlacements[elbow] = pin.SE3(pin.utils.rpyToMatrix(0.0, 0.0, math.pi / 2),
+                                              placement.translation)  # forearm bent at zero
+    shoulder = ik.model.getJointId("r_shoulder_pan_joint")
+    pin.forwardKinematics(ik.model, ik.data, pin.neutral(ik.model))
+    at_zero = np.linalg.norm(pin.updateFramePlacement(ik.model, ik.data, ik.frame_id).translation
+                             - ik.data.oMi[shoulder].translation)
+    _, bent_reach, _, _ = ik._reach_bounds()
+    assert at_zero < 0.8 and bent_reach > at_zero + 0.02 + 0.05
 
 
 def test_reach_test_refuses_a_gripper_facing_back_at_the_shoulder() -> None:

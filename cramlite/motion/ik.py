@@ -92,6 +92,18 @@ class IKSolution:
     iterations: int
 
 
+def _chain_length(model: pin.Model, start: int, end: int) -> float:
+    """The sum of the offsets between the joints from `start` to `end` (a descendant):
+    no configuration puts `end` farther from `start`."""
+    total, joint = 0.0, end
+    while joint != start:
+        if joint <= 0:
+            raise ValueError(f"joint {model.names[end]} is not below {model.names[start]}")
+        total += float(np.linalg.norm(model.jointPlacements[joint].translation))
+        joint = int(model.parents[joint])
+    return total
+
+
 class ArmIK:
     """IK for one arm (optionally with the torso) in the robot's base_footprint frame.
     One thread at a time: a solve works in the solver's own Pinocchio data (and what a
@@ -139,13 +151,22 @@ class ArmIK:
         in the tool frame (where the wrist's joints meet: fixed behind the fingers); and the
         farthest the wrist gets from the shoulder (likewise). A target that puts either out
         of range has no solution, and saying so takes no descent: a handle facing away from
-        the shoulder is near enough for the fingers, not for the wrist."""
+        the shoulder is near enough for the fingers, not for the wrist.
+
+        No distance can exceed the sum of the offsets along the chain; where the neutral
+        configuration reaches that sum (the PR2's arm stretched straight out), it is the
+        farthest, and no sample is drawn (500 forward kinematics an arm saved)."""
         model, data = self.model, self.data
         shoulder = model.getJointId(f"{arm_prefix(self.arm)}_shoulder_pan_joint")
         wrist = model.getJointId(f"{arm_prefix(self.arm)}_wrist_flex_joint")
+        tool_joint = int(model.frames[self.frame_id].parentJoint)
+        tool_bound = _chain_length(model, shoulder, tool_joint) + float(
+            np.linalg.norm(model.frames[self.frame_id].placement.translation))
+        wrist_bound = _chain_length(model, shoulder, wrist)
         rng = np.random.default_rng(0)
         reach = wrist_reach = 0.0
-        for q in [pin.neutral(model), *(self.random_q(rng) for _ in range(500))]:
+        for k in range(501):
+            q = pin.neutral(model) if k == 0 else self.random_q(rng)
             if self._torso is not None:
                 q[self._torso[0]] = 0.0
             pin.forwardKinematics(model, data, q)
@@ -155,7 +176,9 @@ class ArmIK:
             # (np.linalg.norm's own arithmetic, without its checks: 500 samples an arm)
             reach = max(reach, math.sqrt(tool.dot(tool)))
             wrist_reach = max(wrist_reach, math.sqrt(to_wrist.dot(to_wrist)))
-        in_tool = data.oMf[self.frame_id].actInv(data.oMi[wrist]).translation.copy()
+            in_tool = data.oMf[self.frame_id].actInv(data.oMi[wrist]).translation.copy()
+            if k == 0 and reach >= tool_bound - 1e-12 and wrist_reach >= wrist_bound - 1e-12:
+                break  # (the neutral configuration is the farthest there is)
         return data.oMi[shoulder].translation.copy(), reach + 0.02, in_tool, wrist_reach + 0.02
 
     def out_of_reach(self, target: pin.SE3, fixed_torso_m: float | None = None) -> bool:
