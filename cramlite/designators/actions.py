@@ -49,7 +49,7 @@ from cramlite.designators.motions import (
 )
 from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription, as_object
 from cramlite.designators.tasks import ActionDesignator
-from cramlite.motion.footprint import convex_hull_2d, unique_rows
+from cramlite.motion.footprint import convex_hull_2d, following, unique_rows
 from cramlite.motion.ik import ARMS
 from cramlite.motion.trajectory import wrap_angle
 from cramlite.process_cache import ProcessCache
@@ -686,7 +686,7 @@ def footprint_outline(points_xy: np.ndarray, spacing: float) -> np.ndarray:
     if len(hull) < 3 or abs(_area(hull)) < 1e-12:  # fewer than 3 points, or all on a line
         return unique_rows(np.round(pts, 6))
     # n points on each edge a -> b, from a (inclusive) towards b (exclusive)
-    edges = np.roll(hull, -1, axis=0) - hull
+    edges = following(hull) - hull
     n = np.maximum(1, np.ceil(np.hypot(edges[:, 0], edges[:, 1]) / spacing)).astype(int)
     edge = np.repeat(np.arange(len(hull)), n)
     step = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)
@@ -696,7 +696,7 @@ def footprint_outline(points_xy: np.ndarray, spacing: float) -> np.ndarray:
 def _area(polygon: np.ndarray) -> float:
     """Signed area of a polygon (shoelace)."""
     x, y = polygon[:, 0], polygon[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    return 0.5 * float(np.dot(x, following(y)) - np.dot(y, following(x)))
 
 
 def update_carried(ctx: RobotContext) -> None:
