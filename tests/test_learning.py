@@ -289,6 +289,31 @@ def test_compare_command_writes_figure_and_paired_tests(models, slice_csv, tmp_p
     assert (out / "error_distributions.png").stat().st_size > 5000
 
 
+def test_a_model_with_an_empty_test_split_is_refused_by_name_not_scored_on_nothing(
+        tmp_path) -> None:
+    """Five episodes split 0.7/0.15/0.15 leave none to test on: training says so, and
+    scoring the model on its own file under heldout is a one-line error (it was a
+    traceback in `compare` and a mean of nan in `evaluate`)."""
+    small = tmp_path / "five.csv"
+    with DATA.open(newline="") as handle:
+        rows = list(csv.reader(handle))
+    with small.open("w", newline="") as handle:
+        csv.writer(handle).writerows(rows[:6])
+    model = tmp_path / "five.model"
+    trained = run_cli("train", str(small), "--model", "cpt", "--out", str(model))
+    assert trained.returncode == 0, trained.stderr
+    assert "test 0" in trained.stdout and "warning: the test split is empty" in trained.stdout
+    for command, option in (("compare", ["--strategies", f"opm,learned:{model}"]),
+                            ("evaluate", ["--strategy", f"learned:{model}"])):
+        done = run_cli(command, str(small), *option)
+        assert done.returncode == 2, done.stdout + done.stderr
+        assert "Traceback" not in done.stderr
+        assert f"learned:{model}" in done.stderr and "test split" in done.stderr, done.stderr
+    # (another file, or the thesis protocol, scores it on every episode)
+    assert run_cli("evaluate", str(small), "--strategy", f"learned:{model}", "--protocol",
+                   "thesis").returncode == 0
+
+
 @pytest.mark.parametrize(("blocked", "call", "expected"), [
     ("keras", "train_model(DATA, 'nn', OUT)", "training needs keras and jax"),
     ("cpt", "load_model(CPT)", "CPT models need the `cpt` package"),

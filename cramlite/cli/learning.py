@@ -52,6 +52,9 @@ def cmd_train(args: argparse.Namespace) -> int:
         for split_name, value in training["accuracy"].items():
             if value is not None:
                 print(f"  next-item accuracy ({split_name}): {value:.3f}")
+        if not sizes["test"]:
+            print(f"  warning: the test split is empty: `evaluate` and `compare` cannot score "
+                  f"this model on {args.data} under --protocol heldout")
         for kind, path in report["files"].items():
             print(f"wrote {kind}: {path}")
     return EXIT_OK
@@ -111,6 +114,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
             versus = "" if test is None else (
                 f"   vs {first}: Wilcoxon W = {test['statistic']}, p = {test['p']:.3g}")
             thesis = "" if row["published"] is None else f" (thesis {row['published']:.2f})"
+            if row["mean"] is None:  # (no episode every strategy could score)
+                print(f"  {name}: no episode scored{thesis}")
+                continue
             print(f"  {name}: mean {row['mean']:.3f}{thesis}, median {row['median']:.3f}"
                   f"{versus}")
         for kind, path in summary.get("files", {}).items():

@@ -44,7 +44,16 @@ def episodes_to_score(strategy: str, episodes: Sequence[Episode], protocol: str,
     if model.meta.get("data", {}).get("sha256") != data_sha256:
         return list(episodes)
     test = set(model.test_ids())
-    return [ep for ep in episodes if ep.id in test]
+    scored = [ep for ep in episodes if ep.id in test]
+    if not scored:
+        from cramlite.strategies.base import StrategyError
+
+        raise StrategyError(
+            f"{strategy} was trained on this file, and its test split holds none of its "
+            f"{len(episodes)} episodes: under --protocol heldout nothing is left to score "
+            "it on; train it with a larger test fraction (--split) or on more episodes, "
+            "or score it on another file")
+    return scored
 
 
 #: What `thesis_ape` may vary, for the ablation of `cramlite reproduce` (the defaults are
