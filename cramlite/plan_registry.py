@@ -17,7 +17,9 @@ is "no failures").
 from __future__ import annotations
 
 import inspect
+import traceback
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 from cramlite.errors import UserInputError
@@ -27,6 +29,21 @@ ENTRY_POINT_GROUP = "cramlite.plans"
 BUILTIN_PLANS = ("set-table", "clear-table")
 
 Plan = Callable[..., Any]
+
+
+class PlanCrashed(Exception):
+    """A user's plan raised something else than a PlanFailure: a bug in it, named with
+    where in the user's code it happened (one line for the command line)."""
+
+
+def crashed(name: str, exc: BaseException) -> PlanCrashed:
+    """The PlanCrashed that names plan `name`, what it raised and the last line of code
+    outside cramlite that it ran (the user's own, where the bug most likely is)."""
+    package = str(Path(__file__).resolve().parent)
+    frames = [f for f in traceback.extract_tb(exc.__traceback__)
+              if not str(Path(f.filename).resolve()).startswith(package)]
+    where = f" (at {frames[-1].filename}, line {frames[-1].lineno})" if frames else ""
+    return PlanCrashed(f"plan {name} raised {type(exc).__name__}: {exc}{where}")
 
 
 def _builtins() -> dict[str, Plan]:

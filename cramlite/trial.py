@@ -23,13 +23,13 @@ from cramlite.designators import ExecutionOptions, PlanFailure, RobotContext
 from cramlite.designators.tasks import time_in
 from cramlite.errors import SetupError, UserInputError
 from cramlite.plan_names import PLAN_NAMES  # noqa: F401  (re-exported)
-from cramlite.plan_registry import is_builtin, plan_function
+from cramlite.plan_registry import crashed, is_builtin, plan_function
 from cramlite.plans import PlanReport
 from cramlite.scene.scene import PlanningScene
 from cramlite.scene.transforms import quat_yaw, yaw_quat
 from cramlite.scene.validate import check_setup
 from cramlite.strategies import make_strategy
-from cramlite.strategies.base import CheckedStrategy
+from cramlite.strategies.base import CheckedStrategy, StrategyError
 from cramlite.world.setup import Setup, load_setup, resolve_setup_path
 
 RESTING_TOLERANCE_M = 0.01
@@ -146,6 +146,10 @@ class TrialRunner:
                 report = plan_fn(ctx, self.setup, chooser)
             except PlanFailure as exc:  # (a user's plan may let one escape)
                 report = PlanReport(failures=[exc], success=False)
+            except Exception as exc:
+                if is_builtin(plan) or isinstance(exc, StrategyError):
+                    raise  # (cramlite's own bug, or the strategy's: named as such)
+                raise crashed(plan, exc) from exc
             ctx.flush_deferred()  # (a motion the plan deferred to a drive that never came)
             wall_s = time.perf_counter() - start
         finally:

@@ -113,6 +113,28 @@ def test_a_plan_of_the_wrong_shape_is_one_line_and_exit_2(tmp_path: Path) -> Non
         assert "Traceback" not in done.stderr and len(done.stderr.splitlines()) == 1
 
 
+def test_a_bug_in_a_plan_is_one_line_naming_where_and_a_bench_row(tmp_path: Path) -> None:
+    """A plan that raises (not a PlanFailure) is a mistake of the user's: one line with
+    what it raised and the line of the plan's file, exit 2, as for a strategy; a bench
+    records it in the trial's row and goes on."""
+    (tmp_path / "buggy.py").write_text("def plan(ctx, setup, strategy):\n"
+                                       "    ctx.observe()\n"
+                                       "    return 1 / 0\n")
+    plan = f"{tmp_path / 'buggy.py'}:plan"
+    done = run_cli("run", "v1", "--plan", plan, "--backend", "kinematic")
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr and len(done.stderr.splitlines()) == 1, done.stderr
+    assert (f"--plan: plan {plan} raised ZeroDivisionError: division by zero (at "
+            f"{tmp_path / 'buggy.py'}, line 3)") in done.stderr, done.stderr
+    out = tmp_path / "b"
+    bench = run_cli("bench", "--setups", "v1", "--plan", plan, "--strategies", "opm",
+                    "--trials", "1", "--backend", "kinematic", "--out", str(out), "--no-plots")
+    assert bench.returncode == 1, bench.stderr
+    (row,) = _rows(out)
+    assert row["success"] == "False" and row["error_type"] == "PlanCrashed"
+    assert "ZeroDivisionError" in row["error"] and "line 3" in row["error"]
+
+
 def test_a_plan_that_raises_on_import_is_named(tmp_path: Path) -> None:
     (tmp_path / "broken.py").write_text("import no_such_module_anywhere\n")
     done = run_cli("run", "v1", "--plan", f"{tmp_path / 'broken.py'}:plan")

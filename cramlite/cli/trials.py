@@ -102,7 +102,7 @@ def _order(text: str | None, setup, strategy: str) -> list[str] | None:
 def cmd_run(args: argparse.Namespace) -> int:
     import json
 
-    from cramlite.plan_registry import plan_function
+    from cramlite.plan_registry import PlanCrashed, plan_function
     from cramlite.strategies import StrategyError
     from cramlite.trial import TrialRunner
     from cramlite.world import load_setup
@@ -137,6 +137,8 @@ def cmd_run(args: argparse.Namespace) -> int:
                                 inject=inject, carry=args.carry)
         except StrategyError as exc:  # e.g. optimal with too many items, a broken plugin
             raise UserInputError(str(exc), field="--strategy") from None
+        except PlanCrashed as exc:  # a bug in the user's plan: where it is, in one line
+            raise UserInputError(str(exc), field="--plan") from None
         if args.image:
             _save_image(_final_image(runner, backend), args.image, "--image")
     if args.json:
