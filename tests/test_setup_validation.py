@@ -326,3 +326,21 @@ def test_a_containers_file_is_read_by_the_setups_rules_and_refused_in_one_line(
     path = _write(tmp_path, setup_text.replace("world: kitchen ", "world: kitchen.urdf ", 1))
     _assert_user_error(run_cli("show", str(path)), str(tmp_path / "kitchen.containers.yaml"),
                        *fragments)
+
+
+def test_a_setup_written_as_a_path_is_that_file_even_with_a_shipped_name(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`./v1` and `dir/v1` name a file; only the bare name `v1` is the shipped setup."""
+    from cramlite.errors import SetupError
+    from cramlite.world.setup import resolve_setup_path, worlds_dir
+
+    shipped = worlds_dir() / "setups" / "v1.yaml"
+    (tmp_path / "v1").write_text(shipped.read_text())
+    monkeypatch.chdir(tmp_path.parent)
+    assert resolve_setup_path("v1") == shipped
+    assert resolve_setup_path(f"{tmp_path.name}/v1").resolve() == (tmp_path / "v1").resolve()
+    monkeypatch.chdir(tmp_path)
+    assert resolve_setup_path("./v1").resolve() == (tmp_path / "v1").resolve()
+    assert resolve_setup_path(str(tmp_path / "v1")) == tmp_path / "v1"
+    with pytest.raises(SetupError):  # (a shipped name, as a path, is no shipped setup)
+        resolve_setup_path("./v2")

@@ -110,11 +110,13 @@ class Setup:
 
 
 def resolve_setup_path(setup: str | Path) -> Path:
-    """`v1`..`v5` (or any shipped setup name) or a path to a YAML file."""
+    """`v1`..`v5` (or any shipped setup name) or a path to a YAML file. A bare name is a
+    shipped setup's first; anything written as a path (`./v1`, `dir/v1`) is that file."""
     text = str(setup)
-    shipped = worlds_dir() / "setups" / f"{text}.yaml"
-    if shipped.exists():
-        return shipped
+    if isinstance(setup, str) and text and "/" not in text and "\\" not in text:
+        shipped = worlds_dir() / "setups" / f"{text}.yaml"
+        if text in builtin_setup_names() and shipped.is_file():
+            return shipped
     path = Path(text)
     if path.exists():
         return path
