@@ -182,3 +182,30 @@ def test_a_folder_whose_metadata_is_missing_is_refused_saying_so(results, tmp_pa
     else:
         (out / "metadata.json").write_bytes(metadata)
     _one_line(run_cli(*BENCH, "--out", str(out)), "has a trials.csv but no metadata.json")
+
+
+@pytest.mark.parametrize("metadata, expected", [
+    (b"{bad", "metadata.json: not valid JSON"),
+    (b"[1]", "metadata.json holds a JSON list"),
+])
+def test_a_bench_into_a_folder_whose_metadata_is_not_a_json_object_names_it(
+        results, tmp_path, metadata, expected) -> None:
+    """(It was read as results of format 1, "written by an earlier cramlite".)"""
+    out = _tampered(results, tmp_path, "error", "")
+    (out / "metadata.json").write_bytes(metadata)
+    done = run_cli(*BENCH, "--out", str(out))
+    _one_line(done, expected)
+    assert "format 1" not in done.stderr
+
+
+@pytest.mark.parametrize("field", ["arguments", "versions"])
+def test_a_report_of_metadata_with_a_field_of_the_wrong_kind_names_it(results, tmp_path,
+                                                                      field) -> None:
+    import json
+
+    out = _tampered(results, tmp_path, "error", "")
+    data = json.loads((out / "metadata.json").read_text())
+    data[field] = "x"
+    (out / "metadata.json").write_text(json.dumps(data))
+    _one_line(run_cli("report", str(out)), "metadata.json", f"{field}: a JSON str, not an "
+                                                            "object")

@@ -203,12 +203,23 @@ class TrialStore:
                                  "is)", source=str(self.path)) from None
 
     def results_format(self) -> int:
-        """The format of the results in the folder (1: before it was recorded)."""
+        """The format of the results in the folder (1: before it was recorded). A
+        metadata.json that is not a JSON object is a StoreMismatch naming it (it was read
+        as format 1, which told the user of an earlier cramlite that never wrote it)."""
         meta = self.folder / "metadata.json"
         try:
-            value = parse_json(meta.read_text(encoding="utf-8")).get("results_format", 1)
-        except (OSError, ValueError, AttributeError):
-            return 1
+            data = parse_json(meta.read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise StoreMismatch(f"{meta} cannot be read ({exc.strerror or exc}); expected "
+                                "the metadata a bench writes") from None
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise StoreMismatch(f"{meta}: {exc}; expected the metadata a bench writes "
+                                "(restore it, or use a new --out folder)") from None
+        if not isinstance(data, dict):
+            raise StoreMismatch(f"{meta} holds a JSON {type(data).__name__}; expected the "
+                                "object of metadata a bench writes (restore it, or use a new "
+                                "--out folder)")
+        value = data.get("results_format", 1)
         return value if type(value) is int else 1  # (not true, which == 1)
 
     def write_metadata(self, args: dict[str, Any], executor: str,
