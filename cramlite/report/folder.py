@@ -128,11 +128,11 @@ def _metadata(path: Path) -> dict[str, Any]:
                              "`cramlite bench` writes", source=str(path)) from None
     if not isinstance(data, dict):
         raise UserInputError("expected a JSON object", source=str(path))
-    for field in ("arguments", "versions"):  # (what the report reads field by field)
-        if field in data and not isinstance(data[field], dict):
-            raise UserInputError(f"a JSON {type(data[field]).__name__}, not an object; "
+    for key in ("arguments", "versions"):  # (what the report reads field by field)
+        if key in data and not isinstance(data[key], dict):
+            raise UserInputError(f"a JSON {type(data[key]).__name__}, not an object; "
                                  "expected the metadata `cramlite bench` writes",
-                                 source=str(path), field=field)
+                                 source=str(path), field=key)
     return data
 
 
