@@ -156,6 +156,26 @@ def test_fit_cli_finds_the_grid_minimum(tmp_path: Path) -> None:
     assert (out / "error_by_projection.png").stat().st_size > 5000
 
 
+def test_fitting_a_strategy_without_parameters_reports_none(tmp_path: Path) -> None:
+    """random and nearest ignore the OPM's parameters: fit scores them once a projection
+    and says so, where it printed the first grid point's as the best fit (and a
+    Wilcoxon test with W = None where every score was the same)."""
+    from tests.test_evaluation_data import CLEANING, COOKING, write_csv
+
+    path = write_csv(tmp_path, COOKING, CLEANING)
+    for strategy in ("random", "nearest"):
+        out = tmp_path / strategy
+        done = run_cli("fit", str(path), "--strategy", strategy, "--dims", "xy,xyz", "--out",
+                       str(out))
+        assert done.returncode == 0, done.stderr
+        assert f"({strategy} takes no parameters)" in done.stdout, done.stdout
+        assert "_k=" not in done.stdout and "W = None" not in done.stdout, done.stdout
+        summary = json.loads((out / "fit.json").read_text())
+        assert all(row["params"] == {} for row in summary["by_projection"].values())
+        rows = [line.split(",") for line in (out / "surface.csv").read_text().splitlines()]
+        assert [r[1:5] for r in rows[1:]] == [["", "", "", ""]] * 2
+
+
 def test_evaluate_cli_json_and_bad_arguments(tmp_path: Path) -> None:
     from tests.test_evaluation_data import CLEANING, COOKING, write_csv
     path = write_csv(tmp_path, COOKING, CLEANING)

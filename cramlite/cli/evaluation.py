@@ -167,7 +167,8 @@ def _print_fit(args: argparse.Namespace, episodes, summary) -> int:
           f"{summary['grid_points']} grid points per projection")
     for d, row in summary["by_projection"].items():
         params = ", ".join(f"{k}={v:.1f}" for k, v in row["params"].items())
-        print(f"  {d:<4} best {params}: mean {row['mean']:.3f}, median {row['median']:.3f}")
+        fitted = f"best {params}" if params else f"({args.strategy} takes no parameters)"
+        print(f"  {d:<4} {fitted}: mean {row['mean']:.3f}, median {row['median']:.3f}")
         flat = {k: v for k, v in row["tied_best"].items() if v[1] > v[0]}
         if flat:  # (the first grid point of a plateau is only one of equals)
             print("       the grid points that fit exactly as well span "
@@ -180,6 +181,9 @@ def _print_fit(args: argparse.Namespace, episodes, summary) -> int:
               f"Wilcoxon vs best p = {src['test_vs_best']['p']:.3g}")
     tests = summary["tests_between_projections"]
     for pair, res in tests.get("wilcoxon", {}).items():
+        if res["statistic"] is None:  # (no episode scored differently: nothing to test)
+            print(f"  Wilcoxon {pair}: the same score on every episode, no test")
+            continue
         print(f"  Wilcoxon {pair}: W = {res['statistic']}, p = {res['p']:.3g}")
     if "friedman" in tests:
         fr = tests["friedman"]

@@ -13,17 +13,23 @@ from cramlite.evaluation.fit import PARAM_NAMES, SOURCE_BEST, FitResult, paired_
 
 
 def fit_summary(result: FitResult, baselines: list[float]) -> dict[str, Any]:
+    """Each projection's best grid point and scores. A strategy that takes no parameters
+    (random, nearest, a plugin that says so) is scored once a projection, with no
+    parameters to report (not the first grid point's, which it ignored)."""
+    takes_params = _takes_params(result)
     per_dims = {}
     samples = {}
     for dims in result.dims:
         _, index = result.best(dims)
         column = result.scores[dims][:, index]
         samples[dims] = column
-        per_dims[dims] = {"params": result.params(index), "mean": float(np.nanmean(column)),
+        per_dims[dims] = {"params": result.params(index) if takes_params else {},
+                          "mean": float(np.nanmean(column)),
                           "median": float(np.nanmedian(column)),
                           "episodes": int(np.isfinite(column).sum()),
                           "tied_best": {name: list(span) for name, span
-                                        in result.tied_best(dims).items()}}
+                                        in result.tied_best(dims).items()}
+                          if takes_params else {}}
     best_dims, best_index = result.best()
     summary: dict[str, Any] = {
         "strategy": result.strategy, "metric": result.metric, "grid_points": len(result.configs),
@@ -42,7 +48,16 @@ def fit_summary(result: FitResult, baselines: list[float]) -> dict[str, Any]:
     return summary
 
 
+def _takes_params(result: FitResult) -> bool:
+    from cramlite.strategies.registry import ignores_params
+
+    return not ignores_params(result.strategy)
+
+
 def write_surface(result: FitResult, path: Path) -> None:
+    """surface.csv: each grid point's mean and median per projection (the parameter
+    columns empty for a strategy that takes none)."""
+    takes_params = _takes_params(result)
     with path.open("w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["dims", *PARAM_NAMES, "mean", "median"])
@@ -50,8 +65,8 @@ def write_surface(result: FitResult, path: Path) -> None:
             table = result.scores[dims]
             means, medians = np.nanmean(table, axis=0), np.nanmedian(table, axis=0)
             for g, row in enumerate(result.configs):
-                writer.writerow([dims, *(f"{v:.1f}" for v in row), f"{means[g]:.6f}",
-                                 f"{medians[g]:.6f}"])
+                values = [f"{v:.1f}" for v in row] if takes_params else [""] * len(row)
+                writer.writerow([dims, *values, f"{means[g]:.6f}", f"{medians[g]:.6f}"])
 
 
 def plot_by_projection(result: FitResult, baselines: list[float], path: Path) -> bool:
