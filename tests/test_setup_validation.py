@@ -239,6 +239,10 @@ def test_a_target_needs_something_under_it_wherever_its_item_starts(tmp_path: Pa
      ("type 'hinge'",)),
     ("<!DOCTYPE r [<!ENTITY a 'aaaa'>]><robot name='x'><link name='&a;'/></robot>",
      ("DOCTYPE",)),
+    # urdfdom printed eight lines of its own, from C++, before the one of cramlite's
+    (MILK.replace('<box size="0.075 0.075 0.2"/>', "", 1), ("a <geometry> with 0 shapes",)),
+    (MILK.replace('<box size="0.075 0.075 0.2"/>', '<box size="0.075 0.075 0.2"/>'
+                  '<sphere radius="0.1"/>', 1), ("a <geometry> with 2 shapes",)),
 ])
 def test_item_urdfs_that_cannot_be_loaded_are_refused(tmp_path: Path, setup_text: str,
                                                       urdf: str,
@@ -344,3 +348,14 @@ def test_a_setup_written_as_a_path_is_that_file_even_with_a_shipped_name(
     assert resolve_setup_path(str(tmp_path / "v1")) == tmp_path / "v1"
     with pytest.raises(SetupError):  # (a shipped name, as a path, is no shipped setup)
         resolve_setup_path("./v2")
+
+
+def test_an_item_without_collision_geometry_is_named_once(tmp_path: Path,
+                                                         setup_text: str) -> None:
+    visual_only = ("<robot name='x'><link name='a'><visual><geometry><box size='0.1 0.1 0.1'/>"
+                   "</geometry></visual></link></robot>")
+    (tmp_path / "odd.urdf").write_text(visual_only)
+    path = _write(tmp_path, setup_text.replace("type: spoon ", "type: odd.urdf ", 1))
+    done = run_cli("show", str(path))
+    _assert_user_error(done, str(path), "the item has no collision geometry")
+    assert done.stderr.count("odd.urdf") == 1, done.stderr

@@ -333,7 +333,7 @@ def _item_model(urdf: str, digest: str, type_: str) -> ItemModel:
     root = model.model.frames[1].name if len(model.model.frames) > 1 else ""
     shapes = tuple(s for s in model.shapes)
     if not shapes:
-        raise ValueError(f"{urdf}: the item has no collision geometry")
+        raise ValueError("the item has no collision geometry")
     placements = model.link_placements({})
     corners = []
     for shape in shapes:

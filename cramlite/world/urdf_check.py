@@ -120,6 +120,9 @@ def _origins(element: ET.Element, label: str) -> None:
 def _check_link(link: ET.Element, path: Path) -> None:
     label = f"link {link.get('name')!r}"
     for geometry in link.iter("geometry"):
+        if len(geometry) != 1:  # (urdfdom prints its complaint from C++, then skips it)
+            raise URDFProblem(f"{label}: a <geometry> with {len(geometry)} shapes; expected "
+                              "one box, cylinder, sphere or mesh")
         for shape in geometry:
             _check_shape(shape, label, path)
     _origins(link, label)
