@@ -254,3 +254,14 @@ def test_a_trace_is_not_checked_against_a_setup_changed_since(tmp_path: Path) ->
         changed = run_cli("replay", str(trace), *args)
         assert changed.returncode == 2, changed.stderr
         assert "has changed since this trace was written" in changed.stderr, changed.stderr
+
+
+def test_a_penetration_under_a_centimetre_is_given_in_millimetres() -> None:
+    """`--tolerance-cm 0.01` listed "0.0 cm inside" three times, then "3 deeper than
+    0.01 cm": depths under 1 cm are given in mm, to the precision they are found at."""
+    from cramlite.trace.check import Penetration
+
+    assert Penetration("island", "bowl", 0.0004, 1.0, 3).describe().startswith(
+        "island 0.4 mm inside bowl at t = 1.00 s")
+    assert "0.04 mm inside" in Penetration("island", "bowl", 0.00004, 1.0, 3).describe()
+    assert "34.6 cm inside" in Penetration("base_link", "island", 0.346, 1.0, 3).describe()

@@ -38,6 +38,7 @@ from cramlite.scene.geometry import (
     bounds_at,
     boxes_apart,
     convex_hull_planes,
+    depth_text,
     inside_mesh,
     placed_bounds,
     point_triangle_distances,
@@ -86,7 +87,8 @@ class Contact:
     depth_m: float
 
     def describe(self) -> str:
-        return f"{self.what} {self.depth_m * 100:.1f} cm inside {self.other}"
+        return f"{self.what} {depth_text(self.depth_m)} inside {self.other}"
+
 
 
 @dataclass(frozen=True)

@@ -228,3 +228,12 @@ def bounds_at(centres: np.ndarray, halves: np.ndarray, placements: np.ndarray,
     mid = (rotations @ centres[:, :, None])[:, :, 0] + placements[:, :3, 3]
     span = (np.abs(rotations) @ halves[:, :, None])[:, :, 0]
     return mid - span, mid + span
+
+
+def depth_text(depth_m: float) -> str:
+    """A penetration's depth for a message: in cm from 1 cm, below that in mm (a depth
+    under the tolerance of `replay --check --tolerance-cm 0.01` read "0.0 cm")."""
+    if depth_m >= 0.00995:
+        return f"{depth_m * 100:.1f} cm"
+    mm = depth_m * 1000
+    return f"{mm:.1f} mm" if mm >= 0.0995 else f"{mm:.2g} mm"

@@ -30,6 +30,7 @@ import numpy as np
 
 from cramlite.scene.geometry import (
     PointGrid,
+    depth_text,
     placed_bounds,
     point_triangle_distances,
     primitive_depth,
@@ -66,7 +67,7 @@ class Penetration:
     def describe(self) -> str:
         where = f"between lines {self.line} and {self.line + 1}" if self.between \
             else f"line {self.line}"
-        return (f"{self.what} {self.depth_m * 100:.1f} cm inside {self.other} at t = "
+        return (f"{self.what} {depth_text(self.depth_m)} inside {self.other} at t = "
                 f"{self.t:.2f} s ({where})")
 
 
