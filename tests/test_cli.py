@@ -116,6 +116,8 @@ def test_the_command_reference_is_what_the_parsers_say() -> None:
     text = (ROOT / "docs" / "commands.md").read_text()
     assert text == command_reference(), "regenerate: python -m cramlite.cli.reference " \
                                         "> docs/commands.md"
+    # (a description laid out by hand keeps its layout: the request of `order`)
+    assert '```text\n{"robot": [x, y, z],' in text
     for name, parser in _subparsers().items():
         assert f"## `cramlite {name}`" in text
         for option in _options(parser):

@@ -290,7 +290,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     fit_cmd.add_argument("--independent-mid", action="store_true",
                          help="grid mid k independently (0.1-1.0) instead of strong k + 0.1")
     fit_cmd.add_argument("--out", default="fit-results",
-                         help="folder for surface.csv, fit.json, error_by_projection.png")
+                         help="folder for surface.csv, fit.json, error_by_projection.png "
+                              "(default fit-results)")
     fit_cmd.add_argument("--workers", type=workers_int, default=os.cpu_count() or 1,
                          help="processes for strategies scored point by point (default: "
                               "all cores); opm, nearest, opm-2step and optimal under APE are "
@@ -315,6 +316,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                      help="how many (default: as many as --like has; the j-th copies the "
                           "task of episode j modulo that)")
     sim.add_argument("--seed", type=seed_int, default=0, help="random seed")
-    sim.add_argument("--out", default="simulated.csv", help="the CSV to write")
+    sim.add_argument("--out", default="simulated.csv",
+                     help="the CSV to write (default simulated.csv)")
     sim.add_argument("--json", action="store_true", help="print one JSON object")
     sim.set_defaults(func=cmd_simulate)

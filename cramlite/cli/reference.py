@@ -56,12 +56,29 @@ def command_reference() -> str:
         parts.append(f"## `cramlite {name}`\n\n{summary[0].upper()}{summary[1:]}.\n")
         parts.append(f"```text\n{_usage(name, command)}\n```\n")
         if command.description:
-            parts.append(" ".join(command.description.split()) + "\n")
+            parts.append(_description(command))
         rows = [_option(a) for a in command._actions
                 if a.help != argparse.SUPPRESS and "--help" not in a.option_strings]
         if rows:
             parts.append("| argument | what it does |\n| --- | --- |\n" + "\n".join(rows) + "\n")
     return "\n".join(parts)
+
+
+def _description(command: argparse.ArgumentParser) -> str:
+    """A command's description as Markdown: prose joined into paragraphs; where the
+    parser keeps its layout (a raw description), its indented blocks as code blocks (the
+    request layout of `order` was one unreadable paragraph)."""
+    text = command.description or ""
+    if not issubclass(command.formatter_class, argparse.RawDescriptionHelpFormatter):
+        return " ".join(text.split()) + "\n"
+    out = []
+    for block in text.strip("\n").split("\n\n"):
+        lines = block.split("\n")
+        if all(line.startswith(" ") for line in lines if line.strip()):
+            out.append("```text\n" + textwrap.dedent(block).strip("\n") + "\n```")
+        else:
+            out.append(" ".join(block.split()))
+    return "\n\n".join(out) + "\n"
 
 
 if __name__ == "__main__":

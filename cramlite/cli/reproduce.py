@@ -49,7 +49,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "(the OPM's fit, Tables 4.2-4.4, the learned models on "
                                    "three activities with an ablation, parameter recovery), "
                                    "training included, into OUT/reproduce.md and .html.")
-    p.add_argument("--out", default="reproduce", help="folder for the page and the models")
+    p.add_argument("--out", default="reproduce",
+                   help="folder for the page and the models (default reproduce)")
     p.add_argument("--episodes", type=episodes_int,
                    help="at most this many episodes of each data set (a quick look)")
     p.add_argument("--setups", default="v1,v2,v3,v4,v5", help="robot setups (default v1-v5)")
