@@ -307,6 +307,33 @@ def test_the_rerun_command_of_a_setup_file_runs_as_printed(tmp_path) -> None:
     assert json.loads(rerun.stdout)["order"] == row["order"].split()
 
 
+def test_the_rerun_command_of_relative_plan_and_strategy_files_runs_from_anywhere(
+        tmp_path) -> None:
+    """`--plan ./fetch_two.py:fetch_two` typed in the bench's folder: the report's rerun
+    command names the file by its absolute path (as typed, it failed elsewhere)."""
+    import re
+    import shlex
+    import shutil
+
+    shutil.copy(ROOT / "examples" / "fetch_two.py", tmp_path / "fetch_two.py")
+    shutil.copy(ROOT / "examples" / "farthest_first.py", tmp_path / "farthest_first.py")
+    done = subprocess.run([sys.executable, "-m", "cramlite", "bench", "--out", "out",
+                           "--setups", "v1", "--plan", "./fetch_two.py:fetch_two",
+                           "--strategies", "./farthest_first.py:FarthestFirst", "--trials",
+                           "1", "--backend", "kinematic", "--no-plots"],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=600)
+    assert done.returncode == 0, done.stderr
+    text = html.unescape((tmp_path / "out" / "report.html").read_text())
+    (command,) = set(re.findall(r"Rerun it alone: <code>(.*?)</code>", text))
+    words = shlex.split(command)
+    assert f"{tmp_path}/fetch_two.py:fetch_two" in words, words
+    assert f"{tmp_path}/farthest_first.py:FarthestFirst" in words, words
+    rerun = cli(*words[1:], "--json")  # (from the repository's folder)
+    assert rerun.returncode == 0, rerun.stderr
+    (row,) = rows(tmp_path / "out")
+    assert json.loads(rerun.stdout)["order"] == row["order"].split()
+
+
 def test_a_strategy_keeps_its_colour_from_one_report_to_the_next() -> None:
     from cramlite.bench.plots import strategy_colours
 

@@ -135,9 +135,11 @@ def render_page(data: PageData) -> str:
     return "\n".join(p for p in parts if p)
 
 
-def rerun_command(row: dict[str, Any], setup: Any = None) -> str:
+def rerun_command(row: dict[str, Any], setup: Any = None, cwd: str | None = None) -> str:
     """The `cramlite run` command that reruns a trial alone: the setup by its shipped name
-    or its file's path, the plan, strategy, order, seed and backend as the bench had them."""
+    or its file's path, the plan, strategy, order, seed and backend as the bench had them
+    (a plan or strategy file given by a relative path: made absolute from `cwd`, the
+    folder the bench ran in, so that the command runs from anywhere)."""
     import shlex
 
     from cramlite.world.setup import resolve_setup_path
@@ -149,10 +151,10 @@ def rerun_command(row: dict[str, Any], setup: Any = None) -> str:
         except UserInputError:
             shipped = False
         reference = setup.name if shipped else str(setup.source)
-    strategy = row.get("strategy_name", row["strategy"])
+    strategy = _from_anywhere(row.get("strategy_name", row["strategy"]), cwd)
     words = ["cramlite", "run", reference]
     if row.get("plan") and row["plan"] != "set-table":
-        words += ["--plan", row["plan"]]
+        words += ["--plan", _from_anywhere(row["plan"], cwd)]
     words += ["--strategy", strategy if strategy != FIXED_ORDER else "baseline"]
     if strategy == FIXED_ORDER and row.get("given_order"):
         words += ["--order", ",".join(str(row["given_order"]).split())]
@@ -164,6 +166,21 @@ def rerun_command(row: dict[str, Any], setup: Any = None) -> str:
     if str(row.get("carry") or 1) != "1":
         words += ["--carry", str(row["carry"])]
     return shlex.join(words)
+
+
+def _from_anywhere(reference: str, cwd: str | None) -> str:
+    """A `path/to/file.py:name` reference with a relative path made absolute from `cwd`;
+    anything else (a name, a module, an absolute path) as it is."""
+    from pathlib import Path
+
+    from cramlite.plugins import names_file
+
+    if not cwd or not names_file(reference):
+        return reference
+    path, _, name = reference.rpartition(":")
+    if Path(path).expanduser().is_absolute():
+        return reference
+    return f"{Path(cwd) / path}:{name}"
 
 
 def _status(data: PageData) -> str:
@@ -468,7 +485,9 @@ def _trial(data: PageData, row: dict[str, Any]) -> str:
     head = (f'<div class="trial{"" if good else " failed"}" id="trial-{e(tid)}"><h4>'
             f"{chip(colour)}{e(row['setup'])} · {e(row['strategy'])} · trial {e(row['trial'])}"
             f" — " + ("succeeded" if good else '<span class="bad">FAILED</span>') + "</h4>")
-    rerun = rerun_command(row, data.folder.setups.get(row["setup"]))
+    cwd = data.folder.metadata.get("cwd")
+    rerun = rerun_command(row, data.folder.setups.get(row["setup"]),
+                          cwd if isinstance(cwd, str) else None)
     facts = (f"<p>Order: {order_html(row['order'])}<br><span class=note>seed "
              f"{e(row.get('seed', '–'))}; robot time {num(row.get('robot_time_s'))} s "
              f"(driving {num(row.get('drive_s'))} s, arm {num(row.get('arm_s'))} s; opening "
