@@ -135,6 +135,19 @@ def test_a_bug_in_a_plan_is_one_line_naming_where_and_a_bench_row(tmp_path: Path
     assert "ZeroDivisionError" in row["error"] and "line 3" in row["error"]
 
 
+def test_carry_2_with_a_plan_that_carries_one_at_a_time_says_so() -> None:
+    """`--carry` is an option the plan reads: where every trip carried one item, `run`
+    says so instead of reading as if two were carried at once."""
+    done = run_cli("run", "v1", "--carry", "2", "--plan", PLAN, "--backend", "kinematic")
+    assert done.returncode == 0, done.stderr
+    line = next(x for x in done.stdout.splitlines() if "carrying up to 2" in x)
+    assert line.endswith("no trip carried more than one item (a plan option: the plan "
+                         "decides)"), line
+    together = run_cli("run", "v1", "--carry", "2", "--backend", "kinematic")
+    assert "no trip carried more than one" not in together.stdout
+    assert " + " in together.stdout
+
+
 def test_a_plan_that_raises_on_import_is_named(tmp_path: Path) -> None:
     (tmp_path / "broken.py").write_text("import no_such_module_anywhere\n")
     done = run_cli("run", "v1", "--plan", f"{tmp_path / 'broken.py'}:plan")

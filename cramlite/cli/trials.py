@@ -161,7 +161,9 @@ def cmd_run(args: argparse.Namespace) -> int:
               + (f"; tried and failed: {', '.join(missed)}" if missed else ""))
         if result.carry > 1:
             print(f"  carrying up to {result.carry} at once: {len(result.trips)} trips ("
-                  + "; ".join(" + ".join(trip) for trip in result.trips) + ")")
+                  + "; ".join(" + ".join(trip) for trip in result.trips) + ")"
+                  + ("; no trip carried more than one item (a plan option: the plan "
+                     "decides)" if all(len(trip) < 2 for trip in result.trips) else ""))
         legs = (f"{result.straight_line_m:.2f} m" if result.straight_line_m is not None
                 else "not reported by the plan (PlanReport.add_leg)")
         print(f"  driven base path {result.base_path_m:.2f} m, straight-line legs {legs}")
