@@ -8,14 +8,13 @@ anything: the planning scene (`cramlite.scene`) is the planner's model of the wo
 
 from __future__ import annotations
 
-import os
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from cramlite.backends.pybullet.bodies import RobotBody, Vec3, WorldObject, yaw_quat
 from cramlite.backends.pybullet.client import p
+from cramlite.backends.pybullet.display import display_problem
 from cramlite.backends.pybullet.quiet import c_stdout_silenced
 from cramlite.errors import SetupError
 from cramlite.world.containers import Container, load_containers
@@ -38,9 +37,9 @@ class World:
     """A PyBullet world. Use as a context manager or call `close()`."""
 
     def __init__(self, gui: bool = False):
-        if gui and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
-            # PyBullet would exit the whole process from C code
-            raise RuntimeError("the GUI needs a display, and DISPLAY is not set")
+        problem = display_problem() if gui else None
+        if problem:  # (PyBullet would end the whole process from C code)
+            raise RuntimeError(problem)
         with c_stdout_silenced():
             self.client = p.connect(p.GUI if gui else p.DIRECT)
         if self.client < 0:
