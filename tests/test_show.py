@@ -58,11 +58,15 @@ def test_image_bounds_and_unwritable_places(tmp_path: Path) -> None:
     under_file = run_cli("show", "v1", "--out", str(blocker / "v1.png"))
     print(under_file.stderr)
     assert under_file.returncode == 2 and "--out" in under_file.stderr
-    assert "cannot write the image" in under_file.stderr
+    # (as `run --image` says it, before anything is drawn)
+    assert f"is under a file ({blocker}); expected a file in a folder" in under_file.stderr
+    top = run_cli("show", "v1", "--top", "--width", "1", "--height", "1", "--out",
+                  str(tmp_path / "tiny.png"))  # (no matplotlib warning on stderr)
+    assert top.returncode == 0 and top.stderr == "", top.stderr
     folder = tmp_path / "folder.png"
     folder.mkdir()
     onto_folder = run_cli("show", "v1", "--out", str(folder))
-    assert onto_folder.returncode == 2 and "cannot write the image" in onto_folder.stderr
+    assert onto_folder.returncode == 2 and "is a folder" in onto_folder.stderr
     assert "Traceback" not in under_file.stderr + onto_folder.stderr
 
 

@@ -47,23 +47,24 @@ def cmd_show(args: argparse.Namespace) -> int:
     from cramlite.world import load_setup
 
     setup = load_setup(args.setup)
+    out = args.out or f"{setup.name}{'-top' if args.top else ''}.png"
+    writable_file(out, "--out", [("setup file", setup.source)])
     scene = PlanningScene(setup)
     check_setup(scene)
     for problem in reach_problems(scene):  # (a run will fail there; the setup is valid)
         print(f"cramlite show: warning: {setup.source}: {problem}", file=sys.stderr)
     if args.top:
-        return _show_top(setup, args)
+        return _show_top(setup, args, out)
     from cramlite.render import draw_setup
 
     backend = chosen_backend(args.backend)
-    out = args.out or f"{setup.name}.png"
     path = _save_image(draw_setup(setup, args.width, args.height, backend), out, "--out")
     print(f"wrote {path} ({setup.name}: {len(setup.items)} items; drawn as the {backend} "
           "backend draws)")
     return EXIT_OK
 
 
-def _show_top(setup, args: argparse.Namespace) -> int:
+def _show_top(setup, args: argparse.Namespace, out: str) -> int:
     """`show --top`: the top-down map (matplotlib)."""
     try:
         import matplotlib  # noqa: F401
@@ -72,7 +73,6 @@ def _show_top(setup, args: argparse.Namespace) -> int:
                              "'cramlite[plots]'", field="--top") from None
     from cramlite.world.topdown import save_top_view
 
-    out = args.out or f"{setup.name}-top.png"
     try:
         path = save_top_view(setup, out, args.width, args.height)
     except (OSError, ValueError) as exc:

@@ -12,6 +12,7 @@ cramlite[plots]`).
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -292,7 +293,9 @@ def top_view_figure(setup: Setup, width_px: int = 1024, height_px: int = 768) ->
     draw_layout(ax, layout, font_size=max(5.0, min(10.0, 7.0 * height_px / 768)))
     ax.set_title(f"{setup.name}: {setup.description}" if setup.description else setup.name,
                  fontsize=9)
-    fig.tight_layout()
+    with warnings.catch_warnings():  # (a picture a few pixels wide has no room for its
+        warnings.simplefilter("ignore")  # margins: matplotlib warns, the picture is drawn)
+        fig.tight_layout()
     from cramlite.world.map_labels import settle_labels
 
     settle_labels(fig)
