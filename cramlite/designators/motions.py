@@ -9,6 +9,7 @@ the context's process modules execute state by state. No collision-free path rai
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -43,6 +44,7 @@ def move_joints(ctx: RobotContext, joints: dict[str, float], allow_contact: Sequ
     """Plan, time and execute a joint motion to `joints` (only the joints that change move);
     raises MotionPlanningFailed if no collision-free path is found. `while_driving`: run it
     with the next drive (`RobotContext.defer_to_next_drive`)."""
+    check_joint_goal(ctx, joints)
     names = list(joints)
     current = ctx.scene.joint_positions(names)
     start = np.array([current[n] for n in names])
@@ -75,6 +77,37 @@ def move_joints(ctx: RobotContext, joints: dict[str, float], allow_contact: Sequ
         ctx.defer_to_next_drive(timed)
     else:
         ctx.move_joints(timed)
+
+
+#: How far past a joint limit a goal may lie (rounding in IK and in a user's numbers).
+LIMIT_SLACK = 1e-6
+
+
+def check_joint_goal(ctx: RobotContext, joints: dict[str, float]) -> None:
+    """Refuse a goal no motion may reach: a name that is no joint of the robot or a value
+    that is no number (ValueError: a mistake in the plan), a value beyond the joint's
+    limits from the URDF (MotionPlanningFailed: the motion is impossible; it was driven
+    there, and the trace check found the torso at 0.34 m of its 0.31)."""
+    limits = ctx.limits
+    for name, value in joints.items():
+        if name not in limits.lower:
+            arm_like = sorted(n for n in limits.lower if not n.endswith("finger_joint")
+                              and "gripper" not in n)[:4]
+            raise ValueError(f"no joint {name!r} on the robot; expected one of its joints, "
+                             f"e.g. {', '.join(arm_like)}")
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            number = math.nan
+        if not math.isfinite(number):
+            raise ValueError(f"{name}: expected a finite number, got {value!r}")
+        if name in limits.continuous:
+            continue
+        low, high = limits.lower[name], limits.upper[name]
+        if not low - LIMIT_SLACK <= number <= high + LIMIT_SLACK:
+            unit = "m" if name in limits.prismatic else "rad"
+            raise MotionPlanningFailed(f"{name} to {number:g} {unit} is beyond its limits "
+                                       f"[{low:g}, {high:g}] {unit}")
 
 
 #: The tool's steps along an upright-keeping path (IK at each), and its speed there.
