@@ -149,6 +149,36 @@ def test_a_monitor_brakes_the_base_where_its_condition_fires(robot, tmp_path) ->
     assert _node(robot, "Monitor")["status"] == "failed"
 
 
+@pytest.mark.parametrize("after_s", [0.3, 0.5, 0.7])
+def test_a_monitor_that_fires_early_in_a_turning_drive_stops_it_short(robot, tmp_path,
+                                                                      after_s) -> None:
+    """(A red-team pass: fired 0.5 s into the drive to the origin, which turns as it
+    goes, the braking never fitted the limits, so the drive ran on to its goal while
+    the message said it braked.) The braking keeps the path's own states: it fits."""
+    path = tmp_path / "early.jsonl"
+    robot.open_trace(path, "v1", "test", "none", 0, "kinematic")
+    ParkArmsAction().perform(robot)
+    start = robot.time_s
+    with pytest.raises(MonitorFired, match="braked to rest"):
+        Monitor(lambda state: state.t > start + after_s,
+                NavigateAction((0.0, 0.0, 0.0))).perform(robot)
+    assert math.dist(robot.scene.base[:2], (0.0, 0.0)) > 0.5  # stopped on the way
+    assert robot.time_s - start < 2.5  # (the whole drive takes 2.9 s)
+    robot.trace.close()
+    found = [f for f in physics_findings(read_trace(path))
+             if f.kind in ("base acceleration", "yaw acceleration")]
+    assert found == [], [f.describe() for f in found]
+
+
+def test_a_monitor_that_fires_as_a_motion_ends_says_it_ran_to_its_end(robot) -> None:
+    ParkArmsAction().perform(robot)
+    start = robot.time_s
+    with pytest.raises(MonitorFired, match="near its end and came to rest there"):
+        Monitor(lambda state: state.t > start + 2.85,
+                NavigateAction((0.0, 0.0, 0.0))).perform(robot)
+    assert math.dist(robot.scene.base[:2], (0.0, 0.0)) < 1e-6
+
+
 def test_a_monitor_stops_a_joint_motion_and_fallbacks_inside_it_do_not_move(robot) -> None:
     ParkArmsAction().perform(robot)
     torso = "torso_lift_joint"

@@ -455,8 +455,8 @@ class RobotContext:
                          tuple(self.scene.held))
         if k is None:
             return trajectory, None
-        return brake_base_trajectory(trajectory, k, self.options.base_limits), \
-            self._latched()
+        braked = brake_base_trajectory(trajectory, k, self.options.base_limits)
+        return braked, self._fired_on(trajectory, braked)
 
     def _watched_joints(self, trajectory: JointTrajectory):
         from cramlite.motion.braking import brake_joint_trajectory
@@ -475,7 +475,17 @@ class RobotContext:
                          joints_at, tuple(self.scene.held))
         if k is None:
             return trajectory, None
-        return brake_joint_trajectory(trajectory, k, self.limits), self._latched()
+        braked = brake_joint_trajectory(trajectory, k, self.limits)
+        return braked, self._fired_on(trajectory, braked)
+
+    def _fired_on(self, trajectory, braked):
+        """The MonitorFired to raise after a motion a watch stopped: where braking kept
+        the motion (it was at rest sooner at its own end), saying so."""
+        if braked is trajectory:
+            for watch in self.monitors:
+                if watch.fired is not None:
+                    watch.ran_to_its_end(self.time_s + float(trajectory.times[-1]))
+        return self._latched()
 
     def refresh_maps(self) -> None:
         """Point the base planner at the map of the kitchen as it is believed to stand."""

@@ -46,13 +46,24 @@ class Watch:
     condition: Condition
     name: str
     fired: MonitorFired | None = field(default=None)
+    fired_at: float = 0.0  #: the robot time at which it fired
 
     def check(self, state: RobotState) -> bool:
         if self.condition(state):
             self.fired = MonitorFired(f"{self.name} fired at t = {state.t:.2f} s; the motion "
                                       "in progress braked to rest")
+            self.fired_at = state.t
             return True
         return False
+
+    def ran_to_its_end(self, end_t: float) -> None:
+        """Say so where the motion was kept (it came to rest at its own end sooner than
+        braking would have stopped it), not that it braked."""
+        if self.fired is not None:
+            self.fired = MonitorFired(
+                f"{self.name} fired at t = {self.fired_at:.2f} s; the motion in progress was "
+                f"near its end and came to rest there at t = {end_t:.2f} s (sooner than "
+                "braking would)")
 
 
 def first_firing(watches: list[Watch], t0: float, times: np.ndarray,

@@ -101,8 +101,9 @@ def check_joint_goal(ctx: RobotContext, joints: dict[str, float]) -> None:
             number = math.nan
         if not math.isfinite(number):
             raise ValueError(f"{name}: expected a finite number, got {value!r}")
-        if name in limits.continuous:
-            continue
+        if name in limits.continuous or name in ctx.scene.robot.followers_of_any:
+            continue  # (a finger joint that follows its leader: the URDF's limits are the
+            # leader's range, not the follower's, whose multiplier may be -1)
         low, high = limits.lower[name], limits.upper[name]
         if not low - LIMIT_SLACK <= number <= high + LIMIT_SLACK:
             unit = "m" if name in limits.prismatic else "rad"

@@ -17,8 +17,6 @@ import numpy as np
 from cramlite.motion.base_timing import BaseLimits
 from cramlite.motion.trajectory import BaseTrajectory, JointLimits, JointTrajectory, wrap_angle
 
-#: Spacing of the braking motion's states (s).
-BRAKE_STEP_S = 0.02
 #: Finite differences may exceed a limit by this share (their sampling, as the trace
 #: check allows).
 BRAKE_TOLERANCE = 0.05
@@ -26,26 +24,35 @@ BRAKE_TOLERANCE = 0.05
 
 def _braked(positions: np.ndarray, times: np.ndarray, k: int,
             fits: callable) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """(new positions, new times, tau of each new state) or None to keep the motion."""
+    """(new positions, new times, tau of each new state) or None to keep the motion (it
+    comes to rest at its own end sooner than braking would).
+
+    The braking states are the motion's own states up to where braking ends, then that
+    point: each keeps its place on the path and gets a later time. (States resampled
+    every BRAKE_STEP_S between the original ones turned the path's corners within one
+    short step: finite differences beyond the limits at any braking time, so a drive
+    ran on to its goal after its monitor fired.)"""
     if k >= len(times) - 1:
         return None
     dt0 = max(float(times[k + 1] - times[k]), 1e-9)
     velocity = (positions[k + 1] - positions[k]) / dt0
     duration = fits.first_guess(velocity)
-    for _ in range(12):
-        if times[k] + duration / 2 >= times[-1]:
+    while True:
+        end = times[k] + duration / 2  # (tau at t = duration)
+        if end >= times[-1]:
             return None  # (it is at rest sooner along its own profile)
-        steps = max(2, int(np.ceil(duration / BRAKE_STEP_S)))
-        t = np.linspace(0.0, duration, steps + 1)[1:]
-        tau = times[k] + t - t * t / (2 * duration)
+        inner = times[(times > times[k] + 1e-12) & (times < end - 1e-12)]
+        tau = np.concatenate([inner, [end]])
+        # the time at which tau(t) = t_k + t - t^2 / (2 T) reaches each of them
+        t = duration * (1.0 - np.sqrt(np.maximum(0.0, 1.0 - 2.0 * (tau - times[k]) / duration)))
+        t = np.maximum(t, np.concatenate([[0.0], t[:-1]]) + 1e-6)  # (strictly later)
         new = np.array([np.interp(tau, times, positions[:, j])
                         for j in range(positions.shape[1])]).T
         out_p = np.vstack([positions[:k + 1], new])
         out_t = np.concatenate([times[:k + 1], times[k] + t])
         if fits(out_p[max(0, k - 1):], out_t[max(0, k - 1):]):
             return out_p, out_t, np.concatenate([times[:k + 1], tau])
-        duration *= 1.5
-    return None
+        duration *= 1.25
 
 
 class _JointFit:

@@ -256,6 +256,11 @@ class RobotModel(ArticulatedModel):
     def followers(self, leader: str) -> list[str]:
         return [m.joint for m in self.mimics if m.leader == leader]
 
+    @functools.cached_property
+    def followers_of_any(self) -> frozenset[str]:
+        """Every joint that follows another (a mimic tag)."""
+        return frozenset(m.joint for m in self.mimics)
+
     def may_collide(self, link_a: str, link_b: str) -> bool:
         """Whether two links of the robot are checked against each other: not a pair the
         SRDF disables, nor two links fixed to one another (they never move apart)."""
