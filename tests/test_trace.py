@@ -265,3 +265,22 @@ def test_a_penetration_under_a_centimetre_is_given_in_millimetres() -> None:
         "island 0.4 mm inside bowl at t = 1.00 s")
     assert "0.04 mm inside" in Penetration("island", "bowl", 0.00004, 1.0, 3).describe()
     assert "34.6 cm inside" in Penetration("base_link", "island", 0.346, 1.0, 3).describe()
+
+
+def test_a_door_that_swings_through_a_standing_item_is_found(tmp_path: Path) -> None:
+    """A kitchen link and an item were checked only where the item moved (or was held):
+    the cupboard door closing through a milk standing just inside it was never looked at
+    (a red-team plan closed it there). Now a drawer or door that moves is checked against
+    every item."""
+    milk = {"milk": [1.28, 1.75, 1.0, 0.0, 0.0, 0.0, 1.0]}  # (its front 0.7 cm past the door)
+    writer = TraceWriter(tmp_path / "door.jsonl",
+                         {"setup": "c2", "plan": "test", "strategy": "none", "seed": 0,
+                          "joints": JOINTS, "world_joints": ["cupboard_door_joint"]})
+    for i, t in enumerate((0.0, 0.5, 1.0, 1.5, 2.0)):
+        writer.write_state(t, [-0.5, -1.8, 1.5708], [0.0, 0.0], [1.2 * (1 - i / 4)], {}, milk,
+                           None)
+    writer.close()
+    result = run_cli("replay", str(tmp_path / "door.jsonl"), "--check", "--tolerance-cm",
+                     "0.3")
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "cupboard_door" in result.stdout and "inside 'milk'" in result.stdout, result.stdout

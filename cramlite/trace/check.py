@@ -15,7 +15,8 @@ follow their gripper there): each robot link against the kitchen, the items (but
 the action in progress manipulates, and a handle in the hand) and the robot's other
 links (the SRDF's disabled pairs and links fixed to one another excepted); each held
 item against the kitchen, the other items and the robot (its own gripper aside); each
-standing item wherever it moved, against the kitchen and the other items.
+standing item wherever it moved, against the kitchen and the other items; each drawer or
+door wherever it moved, against every item (one closing through an item that stands still).
 """
 
 from __future__ import annotations
@@ -264,6 +265,7 @@ class TraceChecker:
         self.self_pairs = {(a, b) for i, a in enumerate(links) for b in links[i + 1:]
                            if self.robot.may_collide(a, b)}
         self._moved_from: dict[str, np.ndarray] = {}
+        self._swung_from: dict[str, np.ndarray] = {}  #: each kitchen link at the last state
         self._pair_cache: dict[tuple, np.ndarray] = {}
         #: (a's frame in b's, depth) of each pair of bodies when last measured
         self._measured: dict[tuple[int, int], tuple[np.ndarray, float]] = {}
@@ -306,7 +308,7 @@ class TraceChecker:
                     placements.append(item_frames[name] @ body.shape.in_link)
         placed = np.array(placements)
         lo, hi = placed_bounds([b.shape for b in bodies], placed)
-        pairs = self._pairs(bodies, held, manipulated, item_frames)
+        pairs = self._pairs(bodies, held, manipulated, item_frames, kitchen)
         if not len(pairs):
             return
         a, b = pairs[:, 0], pairs[:, 1]
@@ -340,7 +342,8 @@ class TraceChecker:
         return depth + moved < tolerance_m - 1e-6
 
     def _pairs(self, bodies: list[_Body], held: dict[str, str], manipulated: str | None,
-               item_frames: dict[str, np.ndarray]) -> np.ndarray:
+               item_frames: dict[str, np.ndarray],
+               kitchen: dict[str, np.ndarray]) -> np.ndarray:
         """The pairs of bodies (indices) checked at a state: see the module's doc."""
         out = []
         standing = [n for n in item_frames if n not in held]
@@ -350,20 +353,26 @@ class TraceChecker:
             if last is None or np.abs(item_frames[name] - last).max() >= 1e-3:
                 self._moved_from[name] = item_frames[name].copy()
                 moved.add(name)
+        swung = set()  # a drawer or door that moved: checked against every item
+        for link, frame in kitchen.items():
+            last = self._swung_from.get(link)
+            if last is not None and np.abs(frame - last).max() >= 1e-4:
+                swung.add(link)
+            self._swung_from[link] = frame
         key = (tuple(id(b) for b in bodies), tuple(sorted(held.items())), manipulated,
-               frozenset(moved))
+               frozenset(moved), frozenset(swung))
         if key not in self._pair_cache:
             if len(self._pair_cache) > 256:
                 self._pair_cache.clear()
             for i, a in enumerate(bodies):
                 for j in range(i + 1, len(bodies)):
-                    if self._checked(a, bodies[j], held, manipulated, moved):
+                    if self._checked(a, bodies[j], held, manipulated, moved, swung):
                         out.append((i, j))
             self._pair_cache[key] = np.array(out, dtype=int).reshape(-1, 2)
         return self._pair_cache[key]
 
     def _checked(self, a: _Body, b: _Body, held: dict[str, str], manipulated: str | None,
-                 moved: set[str]) -> bool:
+                 moved: set[str], swung: set[str] = frozenset()) -> bool:
         kinds = (a.kind, b.kind)
         if kinds == ("robot", "robot"):
             return (a.owner, b.owner) in self.self_pairs or (b.owner, a.owner) in self.self_pairs
@@ -378,8 +387,8 @@ class TraceChecker:
                 return link.owner not in self.grippers.get(held[other.owner], set())
             return other.owner != manipulated
         if "kitchen" in kinds:
-            item = b if a.kind == "kitchen" else a
-            return item.owner in held or item.owner in moved
+            item, link = (b, a) if a.kind == "kitchen" else (a, b)
+            return item.owner in held or item.owner in moved or link.owner in swung
         # two items: one held (not against the item manipulated), or one that moved
         if a.owner == b.owner:
             return False
