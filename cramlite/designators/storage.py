@@ -463,6 +463,11 @@ def _move_container(ctx: RobotContext, name: str, target: str, arms: Sequence[st
     free = [a for a in (arms or ARMS) if a not in ctx.holding]
     if not free:
         raise ContainerManipulationFailed(f"cannot {target} it: both hands are full", obj=name)
+    from cramlite.designators.container_sweep import sweep_problem
+
+    problem = sweep_problem(ctx, container, now, goal)
+    if problem:  # (before the robot moves: the drawer or door itself would push into it)
+        raise ContainerManipulationFailed(f"cannot {target} it: {problem}", obj=name)
     tried: list[str] = []
     # the whole way from one base pose, or else in stages (a door that opens wide: pulled
     # half way from one pose, then on from another), each from its own base pose
