@@ -52,3 +52,30 @@ def test_a_continuous_joint_takes_any_angle() -> None:
         MoveArmJointsMotion({"r_forearm_roll_joint": 4.0}).perform(ctx)
         value = ctx.modules.joint_positions(["r_forearm_roll_joint"])["r_forearm_roll_joint"]
         assert math.isclose(math.remainder(value - 4.0, 2 * math.pi), 0.0, abs_tol=1e-6)
+
+
+def test_a_move_motion_through_the_counter_is_refused_and_nothing_moves() -> None:
+    from cramlite.designators import MoveMotion, NavigationFailed
+
+    with simulated_robot(load_setup("v1"), backend="kinematic") as ctx:
+        start = tuple(ctx.scene.base)
+        with pytest.raises(NavigationFailed, match=r"not free: the base would not fit at \("):
+            MoveMotion([(2.0, 0.0, 0.0)]).perform(ctx)
+        assert tuple(ctx.scene.base) == start and ctx.time_s == 0.0
+        with pytest.raises(ValueError, match="waypoint 0: expected finite numbers"):
+            MoveMotion([(math.nan, 0.0, 0.0)]).perform(ctx)
+
+
+def test_a_move_motion_starts_where_the_base_stands(tmp_path) -> None:
+    """Its first waypoint elsewhere: the base drives there first (it jumped there)."""
+    from cramlite.designators import MoveMotion
+    from cramlite.trace import read_trace
+
+    with simulated_robot(load_setup("v1"), backend="kinematic") as ctx:
+        ctx.open_trace(tmp_path / "move.jsonl", "v1", "test", "none", 0, "kinematic")
+        MoveMotion([(-0.5, -1.0, math.pi / 2), (-0.5, -0.8, math.pi / 2)]).perform(ctx)
+        assert math.dist(ctx.scene.base[:2], (-0.5, -0.8)) < 1e-6
+    states = read_trace(tmp_path / "move.jsonl").states
+    steps = [math.dist(a["base"][:2], b["base"][:2])
+             for a, b in zip(states, states[1:], strict=False)]
+    assert len(steps) > 5 and max(steps) < 0.1, max(steps)

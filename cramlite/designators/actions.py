@@ -155,7 +155,7 @@ class NavigateAction(ActionDesignator):
             x, y, yaw = self.target
             raise NavigationFailed(f"no collision-free base path to ({x:.2f}, {y:.2f}, "
                                    f"{math.degrees(yaw):.0f} deg)")
-        MoveMotion(path.waypoints).perform(ctx)
+        MoveMotion(path.waypoints, _checked=True).perform(ctx)
         return tuple(ctx.scene.base)  # (where the base ended, as the modules report it)
 
     def validate(self, ctx: RobotContext, result: object = None) -> None:

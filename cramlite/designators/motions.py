@@ -17,7 +17,11 @@ import numpy as np
 import pinocchio as pin
 
 from cramlite.designators.context import RobotContext
-from cramlite.designators.failures import MotionPlanningFailed, ObjectUnreachable
+from cramlite.designators.failures import (
+    MotionPlanningFailed,
+    NavigationFailed,
+    ObjectUnreachable,
+)
 from cramlite.designators.grasps import in_base_frame
 from cramlite.designators.tasks import recorded
 from cramlite.motion.base_timing import time_base_path
@@ -223,16 +227,54 @@ def _why(scene, start: np.ndarray, goal: np.ndarray, ctx: RobotContext) -> str:
 
 @dataclass(frozen=True)
 class MoveMotion:
-    """Drive the base along a checked path (waypoints x, y, yaw)."""
+    """Drive the base along a checked path (waypoints x, y, yaw) from where it stands:
+    the path from the base's pose through the waypoints is checked at the base
+    planner's resolution first (NavigationFailed, naming the first pose that is not
+    free, if it is not; nothing moves then)."""
 
     waypoints: Sequence[BasePose]
+    #: The waypoints are a path the base planner checked from where the base stands (as
+    #: NavigateAction's are): not checked again.
+    _checked: bool = False
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
+        checker = ctx.base_checker()
+        waypoints = list(self.waypoints) if self._checked else _free_base_path(
+            ctx, self.waypoints)
         # (corners are blended where the footprint check, as the path's, says free)
-        timed = time_base_path(self.waypoints, ctx.options.base_limits,
-                               ctx.base_checker().is_free)
+        timed = time_base_path(waypoints, ctx.options.base_limits, checker.is_free)
         ctx.drive(BaseTrajectory(timed.poses, timed.times))
+
+
+def _free_base_path(ctx: RobotContext, waypoints: Sequence[BasePose]) -> list[BasePose]:
+    """The path from the base's pose through `waypoints`, densified and every pose of it
+    free (a path given by hand ran through the counter, and one that did not start
+    where the base stood made it jump)."""
+    points: list[BasePose] = []
+    for i, waypoint in enumerate(waypoints):
+        try:
+            x, y, yaw = (float(v) for v in waypoint)
+        except (TypeError, ValueError):
+            raise ValueError(f"waypoint {i}: expected x, y, yaw, got {waypoint!r}") from None
+        if not all(math.isfinite(v) for v in (x, y, yaw)):
+            raise ValueError(f"waypoint {i}: expected finite numbers, got {waypoint!r}")
+        points.append((x, y, yaw))
+    if not points:
+        raise ValueError("expected at least one waypoint")
+    here = tuple(float(v) for v in ctx.scene.base)
+    if math.dist(points[0][:2], here[:2]) > 1e-6 or \
+            abs(math.remainder(points[0][2] - here[2], math.tau)) > 1e-6:
+        points.insert(0, here)
+    free = ctx.base_planner.free_path(points)
+    if free is None:
+        blocked = ctx.base_planner.first_blocked(points)
+        where = "" if blocked is None else (
+            f": the base would not fit at ({blocked[0]:.2f}, {blocked[1]:.2f}, "
+            f"{math.degrees(blocked[2]):.0f} deg)")
+        raise NavigationFailed(f"the base path through {len(points)} waypoints is not "
+                               f"free{where}")
+    return free
 
 
 @dataclass(frozen=True)

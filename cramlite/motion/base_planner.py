@@ -110,6 +110,16 @@ class BaseMotionPlanner:
         waypoints = self._interpolate(vertices)
         return waypoints if self.checker.all_free(waypoints) else None
 
+    def free_path(self, vertices: Sequence[BasePose]) -> list[BasePose] | None:
+        """The path through these vertices densified as a planned one is, if every pose
+        of it is free; else None (a path given by hand, checked as a planned one)."""
+        return self._free_waypoints(vertices)
+
+    def first_blocked(self, vertices: Sequence[BasePose]) -> BasePose | None:
+        """The first pose of the densified path through `vertices` that is not free."""
+        return next((p for p in self._interpolate(vertices) if not self.checker.is_free(*p)),
+                    None)
+
     def _repair(self, vertices: Sequence[BasePose], seed: int,
                 resolution: float) -> list[BasePose] | None:
         """The path with each segment whose waypoints collide planned again between its
