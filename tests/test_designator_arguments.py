@@ -79,3 +79,37 @@ def test_a_move_motion_starts_where_the_base_stands(tmp_path) -> None:
     steps = [math.dist(a["base"][:2], b["base"][:2])
              for a, b in zip(states, states[1:], strict=False)]
     assert len(steps) > 5 and max(steps) < 0.1, max(steps)
+
+
+def test_a_gripper_holds_only_what_is_between_its_fingers_and_opens_only_to_let_go(
+        tmp_path) -> None:
+    """AttachMotion of a cup 3 m away carried it along; MoveGripperMotion opened a full
+    hand in the air; DetachMotion left the hand (and the trace) still holding."""
+    from cramlite.designators import (
+        AttachMotion,
+        DetachMotion,
+        FetchAction,
+        GraspFailed,
+        MoveGripperMotion,
+        ParkArmsAction,
+    )
+    from cramlite.trace import read_trace
+    from cramlite.trace.physics import physics_findings
+
+    with simulated_robot(load_setup("v1"), backend="kinematic") as ctx:
+        ctx.open_trace(tmp_path / "hand.jsonl", "v1", "test", "none", 0, "kinematic")
+        ParkArmsAction().perform(ctx)
+        with pytest.raises(GraspFailed, match=r"cup: 3\.\d\d m from the left gripper's"):
+            AttachMotion("left", "cup").perform(ctx)
+        assert ctx.scene.belief.held == {}
+        MoveTorsoAction(0.25).perform(ctx)
+        arm = FetchAction("cup", target=(-1.0, 1.1, 0.86)).perform(ctx).arm
+        with pytest.raises(GraspFailed, match="would drop it in the air"):
+            MoveGripperMotion(arm, "open").perform(ctx)
+        with pytest.raises(GraspFailed, match="already in the"):
+            AttachMotion("right" if arm == "left" else "left", "cup").perform(ctx)
+        DetachMotion(arm, "cup").perform(ctx)  # (in the air: the trace check says so)
+        assert ctx.holding == {} and ctx.scene.belief.held == {}
+        ctx.record_state()
+    kinds = {f.kind for f in physics_findings(read_trace(tmp_path / "hand.jsonl"))}
+    assert "support" in kinds

@@ -235,7 +235,7 @@ class PickUpAction(ActionDesignator):
             MoveArmJointsMotion(reach.joints).perform(ctx)
             MoveGripperMotion(reach.arm, "open", (name,)).perform(ctx)
             DetachMotion(reach.arm, name).perform(ctx)
-            del ctx.holding[reach.arm]
+            ctx.holding.pop(reach.arm, None)  # (DetachMotion emptied it)
             MoveArmJointsMotion(reach.pre_joints, (name,)).perform(ctx)
         except PlanFailure:
             ctx.note(f"could not put {name} down again after a failed lift")
@@ -281,7 +281,7 @@ class PlaceAction(ActionDesignator):
         touch = (obj.name,)
         MoveGripperMotion(arm, "open", touch).perform(ctx)
         DetachMotion(arm, obj.name).perform(ctx)
-        del ctx.holding[arm]
+        ctx.holding.pop(arm, None)  # (DetachMotion emptied it)
         ctx.settle([obj.name])
         ctx.record_state()
         MoveArmJointsMotion(reach.post_joints, touch).perform(ctx)  # retreat
@@ -600,7 +600,7 @@ class TransportAction(ActionDesignator):
         except PlanFailure as failure:
             if arm in ctx.holding:
                 DetachMotion(arm, obj.name).perform(ctx)
-                del ctx.holding[arm]
+                ctx.holding.pop(arm, None)  # (DetachMotion emptied it)
                 ctx.settle([obj.name])
                 ctx.note(f"let go of {obj.name} (could not put it back: {failure.reason})")
             return False

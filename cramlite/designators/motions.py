@@ -18,8 +18,10 @@ import pinocchio as pin
 
 from cramlite.designators.context import RobotContext
 from cramlite.designators.failures import (
+    GraspFailed,
     MotionPlanningFailed,
     NavigationFailed,
+    ObjectNotFound,
     ObjectUnreachable,
 )
 from cramlite.designators.grasps import in_base_frame
@@ -35,6 +37,7 @@ from cramlite.motion.trajectory import (
 )
 from cramlite.scene.gripper import gripper_geometry
 from cramlite.scene.models import pr2_model
+from cramlite.scene.scene import shape_corners
 
 BasePose = tuple[float, float, float]
 #: The finger joint the others of a gripper follow (see the URDF's mimic tags).
@@ -347,6 +350,11 @@ class MoveGripperMotion:
     def perform(self, ctx: RobotContext) -> None:
         if self.state not in ("open", "close"):
             raise ValueError(f"gripper state must be 'open' or 'close', got {self.state!r}")
+        held = ctx.scene.holding(self.arm)
+        if self.state == "open" and held is not None and held not in self.allow_contact:
+            # (a place opens the hand on what it puts down, named in allow_contact)
+            raise GraspFailed(f"opening the {self.arm} gripper would drop it in the air; "
+                              "put it down with PlaceAction", obj=held)
         closed_at = None if self.width_m is None else \
             gripper_geometry().closing_angle(self.width_m)
         move_joints(ctx, gripper_joints(self.arm, self.state, closed_at), self.allow_contact)
@@ -354,13 +362,25 @@ class MoveGripperMotion:
 
 @dataclass(frozen=True)
 class AttachMotion:
-    """The object moves with the gripper from now on."""
+    """The object moves with the gripper from now on. It must be between the gripper's
+    fingers (its tool frame within `ATTACH_REACH_M` of the object's bounds) and in no
+    other hand: a gripper does not hold what it does not reach (GraspFailed)."""
 
     arm: str
     obj: str
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
+        if self.obj not in ctx.scene.items:
+            raise ObjectNotFound(f"no such object; expected one of "
+                                 f"{', '.join(ctx.scene.items)}", obj=self.obj)
+        other = ctx.scene.belief.held.get(self.obj)
+        if other is not None and other.arm != self.arm:
+            raise GraspFailed(f"already in the {other.arm} hand", obj=self.obj)
+        gap = _tool_gap_m(ctx, self.arm, self.obj)
+        if gap > ATTACH_REACH_M:
+            raise GraspFailed(f"{gap:.2f} m from the {self.arm} gripper's fingers: it holds "
+                              "only what is between them", obj=self.obj)
         ctx.modules.attach(self.arm, self.obj)
         ctx.observe()
         ctx.scene.attach(self.arm, self.obj)
@@ -376,5 +396,25 @@ class DetachMotion:
     def perform(self, ctx: RobotContext) -> None:
         ctx.modules.detach(self.arm, self.obj)
         ctx.scene.detach(self.obj)
+        holding = ctx.holding.get(self.arm)
+        if holding is not None and holding.obj == self.obj:  # (the hand is empty now)
+            del ctx.holding[self.arm]
         ctx.observe()
         ctx.footprint_stale = True
+
+
+#: How far the tool frame (between the fingertips) may be from an object's bounds for
+#: the gripper to hold it (its fingers are 4 cm long).
+ATTACH_REACH_M = 0.03
+
+
+def _tool_gap_m(ctx: RobotContext, arm: str, obj: str) -> float:
+    """The distance from the gripper's tool frame to the object's bounds (its own frame:
+    0 inside them)."""
+    tool = ctx.scene.link_matrix(f"{arm_prefix(arm)}_gripper_tool_frame")[:3, 3]
+    frame = ctx.scene.item_matrix(obj)
+    local = frame[:3, :3].T @ (tool - frame[:3, 3])
+    corners = np.vstack([shape_corners(shape, shape.in_link)
+                         for shape in ctx.scene.items[obj].model.shapes])
+    lo, hi = corners.min(axis=0), corners.max(axis=0)
+    return float(np.linalg.norm(np.maximum(0.0, np.maximum(lo - local, local - hi))))
