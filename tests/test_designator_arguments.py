@@ -113,3 +113,30 @@ def test_a_gripper_holds_only_what_is_between_its_fingers_and_opens_only_to_let_
         ctx.record_state()
     kinds = {f.kind for f in physics_findings(read_trace(tmp_path / "hand.jsonl"))}
     assert "support" in kinds
+
+
+@pytest.mark.parametrize(("make", "expected"), [
+    (lambda d: d.ParkArmsAction("middle"), "arm must be 'left', 'right' or 'both'"),
+    (lambda d: d.NavigateAction((math.nan, 0.0, 0.0)), "expected 3 finite numbers"),
+    (lambda d: d.NavigateAction((math.inf, 0.0, 0.0)), "expected 3 finite numbers"),
+    (lambda d: d.NavigateAction([0.0, 0.0]), r"target \(x, y, yaw\): expected 3 finite"),
+    (lambda d: d.LookAtAction((1.0, 2.0)), "LookAtAction: target: expected 3"),
+    (lambda d: d.Repeat(d.ParkArmsAction(), -1), "times must be a whole number >= 0"),
+    (lambda d: d.Retry(d.ParkArmsAction(), 0), "attempts must be a whole number >= 1"),
+])
+def test_a_designator_written_with_no_usable_argument_is_refused_where_it_is_written(
+        make, expected) -> None:
+    """(They escaped as KeyError, ValueError from a float conversion deep in the base
+    checker, OverflowError or IndexError when performed.)"""
+    import cramlite.designators as d
+
+    with pytest.raises(ValueError, match=expected):
+        make(d)
+
+
+def test_looking_at_an_object_that_is_not_there_is_object_not_found() -> None:
+    from cramlite.designators import LookAtAction, ObjectNotFound
+
+    with simulated_robot(load_setup("v1"), backend="kinematic") as ctx, \
+            pytest.raises(ObjectNotFound, match="teapot: no such object; expected one of"):
+        LookAtAction("teapot").perform(ctx)

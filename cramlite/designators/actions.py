@@ -27,6 +27,7 @@ from cramlite.designators.failures import (
     ObjectUnreachable,
     PlacementFailed,
     PlanFailure,
+    finite_numbers,
 )
 from cramlite.designators.grasps import Grasp, item_grasps, relative_pose
 from cramlite.designators.locations import (
@@ -93,6 +94,11 @@ class ParkArmsAction(ActionDesignator):
     #: where the combination collides or no drive comes next).
     while_driving: bool = False
 
+    def __post_init__(self) -> None:
+        if self.arm not in (*ARMS, "both"):
+            raise ValueError(f"ParkArmsAction: arm must be 'left', 'right' or 'both', got "
+                             f"{self.arm!r}")
+
     def execute(self, ctx: RobotContext) -> dict[str, dict[str, float]]:
         arms = ARMS if self.arm == "both" else (self.arm,)
         for arm in arms:
@@ -146,6 +152,9 @@ class NavigateAction(ActionDesignator):
     """Drive the base to a pose along a collision-free OMPL path; returns where it ended."""
 
     target: BasePose  #: x, y, yaw in the world
+
+    def __post_init__(self) -> None:
+        finite_numbers(self.target, 3, "NavigateAction: target (x, y, yaw)")
 
     def execute(self, ctx: RobotContext) -> BasePose:
         ctx.base_checker()  # up to date with what sticks out of the base

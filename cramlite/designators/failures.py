@@ -6,6 +6,7 @@ escaped (base poses, arms, grasps, placements), so a user can see why a plan gav
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from cramlite.errors import bounded_text
@@ -86,3 +87,15 @@ class ContainerManipulationFailed(PlanFailure):
     its handle, or the motion failed)."""
 
     kind = "container manipulation failed"
+
+
+def finite_numbers(values: object, count: int, what: str) -> tuple[float, ...]:
+    """`values` as `count` finite floats, or a ValueError naming `what` (a designator's
+    argument that is no pose or point: a mistake in the plan, said where it is written)."""
+    try:
+        numbers = tuple(float(v) for v in values)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        numbers = ()
+    if len(numbers) != count or not all(math.isfinite(v) for v in numbers):
+        raise ValueError(f"{what}: expected {count} finite numbers, got {values!r}")
+    return numbers

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cramlite.designators.context import RobotContext
-from cramlite.designators.failures import MotionPlanningFailed
+from cramlite.designators.failures import MotionPlanningFailed, ObjectNotFound, finite_numbers
 from cramlite.designators.motions import move_joints
 from cramlite.designators.tasks import ActionDesignator
 
@@ -76,8 +76,16 @@ class LookAtAction(ActionDesignator):
 
     target: tuple[float, float, float] | str
 
+    def __post_init__(self) -> None:  # (a point that is no point: refused where written)
+        if not isinstance(self.target, str):
+            finite_numbers(self.target, 3, "LookAtAction: target")
+
     def _point(self, ctx: RobotContext) -> tuple[float, float, float]:
         if isinstance(self.target, str):
+            if self.target not in ctx.scene.items:
+                raise ObjectNotFound(f"no such object; expected one of "
+                                     f"{', '.join(ctx.scene.items)} or a point (x, y, z)",
+                                     obj=self.target)
             (x, y, z), _ = ctx.scene.object_pose(self.target)
             return (x, y, z + ctx.scene.items[self.target].height() / 2)
         return tuple(float(v) for v in self.target)

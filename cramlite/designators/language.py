@@ -151,9 +151,11 @@ class Repeat:
     step: Step
     times: int
 
+    def __post_init__(self) -> None:  # (refused where the plan writes it)
+        if isinstance(self.times, bool) or not isinstance(self.times, int) or self.times < 0:
+            raise ValueError(f"Repeat: times must be a whole number >= 0, got {self.times!r}")
+
     def perform(self, ctx: RobotContext) -> list[Any]:
-        if self.times < 0:
-            raise ValueError(f"Repeat: times must be >= 0, got {self.times}")
         with _node(ctx, "Repeat"):
             return [_run(self.step, ctx) for _ in range(self.times)]
 
@@ -182,9 +184,13 @@ class Retry:
     attempts: int = 2
     on_failure: Recovery | None = None
 
+    def __post_init__(self) -> None:  # (refused where the plan writes it)
+        if isinstance(self.attempts, bool) or not isinstance(self.attempts, int) or \
+                self.attempts < 1:
+            raise ValueError(f"Retry: attempts must be a whole number >= 1, got "
+                             f"{self.attempts!r}")
+
     def perform(self, ctx: RobotContext) -> Any:
-        if self.attempts < 1:
-            raise ValueError(f"Retry: attempts must be >= 1, got {self.attempts}")
         failures: list[tuple[str, PlanFailure]] = []
         with _node(ctx, "Retry"):
             for attempt in range(1, self.attempts + 1):
