@@ -140,3 +140,26 @@ def test_looking_at_an_object_that_is_not_there_is_object_not_found() -> None:
     with simulated_robot(load_setup("v1"), backend="kinematic") as ctx, \
             pytest.raises(ObjectNotFound, match="teapot: no such object; expected one of"):
         LookAtAction("teapot").perform(ctx)
+
+
+def test_failures_say_what_is_in_the_way() -> None:
+    """A goal inside the counter and a pick out of a closed drawer said only "no path" and
+    "no arm and grasp reaches it"."""
+    from cramlite.designators import (
+        NavigateAction,
+        NavigationFailed,
+        ObjectUnreachable,
+        ParkArmsAction,
+        PickUpAction,
+    )
+
+    with simulated_robot(load_setup("c1"), backend="kinematic") as ctx:
+        ParkArmsAction().perform(ctx)
+        with pytest.raises(NavigationFailed, match=r"\(2.00, 0.00, 0 deg\): the base does "
+                                                   "not fit there"):
+            NavigateAction((2.0, 0.0, 0.0)).perform(ctx)
+        MoveTorsoAction(0.25).perform(ctx)
+        NavigateAction((0.75, -0.7, 0.0)).perform(ctx)
+        with pytest.raises(ObjectUnreachable, match="drawer_1, which holds it, is closed: "
+                                                    r"OpenAction\('drawer_1'\) first"):
+            PickUpAction("spoon").perform(ctx)

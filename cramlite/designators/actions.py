@@ -162,8 +162,13 @@ class NavigateAction(ActionDesignator):
         path = ctx.base_planner.plan(start, self.target, ctx.rng)
         if path is None:
             x, y, yaw = self.target
+            why = ("the base does not fit there (it would hit the kitchen, an item, or "
+                   "stick out past the kitchen's walls)"
+                   if not ctx.checker.is_free(x, y, yaw) else
+                   "none found within the planner's budget" if ctx.checker.is_free(*start)
+                   else "the base does not fit where it stands")
             raise NavigationFailed(f"no collision-free base path to ({x:.2f}, {y:.2f}, "
-                                   f"{math.degrees(yaw):.0f} deg)")
+                                   f"{math.degrees(yaw):.0f} deg): {why}")
         MoveMotion(path.waypoints, _checked=True).perform(ctx)
         return tuple(ctx.scene.base)  # (where the base ended, as the modules report it)
 
@@ -199,7 +204,10 @@ class PickUpAction(ActionDesignator):
     def execute(self, ctx: RobotContext) -> str:
         obj = as_object(self.object, ctx)
         if obj.name in held(ctx):
-            raise GraspFailed("already held", obj=obj.name)
+            hand = next((a for a, h in ctx.holding.items() if h.obj == obj.name), None)
+            raise GraspFailed("already held" + (f" in the {hand} hand: put it down with "
+                                                "PlaceAction first" if hand else ""),
+                              obj=obj.name)
         reach = self.reach or self._resolve(ctx, obj)
         if reach.arm in ctx.holding:
             raise GraspFailed(f"the {reach.arm} hand is not free", obj=obj.name)
@@ -261,8 +269,12 @@ class PickUpAction(ActionDesignator):
                 if reach is not None:
                     return reach
                 tried.append(f"{arm} arm {grasp} grasp")
-        raise ObjectUnreachable("no arm and grasp reaches it from here", obj=obj.name,
-                                tried=tried)
+        inside = ctx.scene.container_of(obj.name)
+        closed = "" if inside is None or ctx.scene.is_open(inside) else (
+            f" ({inside.name}, which holds it, is closed: OpenAction({inside.name!r}) "
+            "first, or TransportAction, which opens it)")
+        raise ObjectUnreachable(f"no arm and grasp reaches it from here{closed}",
+                                obj=obj.name, tried=tried)
 
 
 @dataclass
