@@ -58,7 +58,22 @@ class _Shapes:
 def sweep_problem(ctx: RobotContext, container: Container, start: float, end: float,
                   ) -> str | None:
     """What moving `container` from `start` to `end` would push into (one line naming
-    the two and how deep), or None if its way is clear."""
+    the two and how deep), or None if its way is clear. Kept per scene by everything it
+    depends on (where every drawer, door and item is, what is held): the next trial of a
+    setup asks the same."""
+    scene = ctx.scene
+    key = ("sweep", container.name, float(start), float(end),
+           tuple(sorted(scene.belief.world_joints.items())),
+           tuple(sorted((name, tuple(np.round(scene.item_matrix(name)[:3], 9).ravel()))
+                        for name in scene.items)),
+           tuple(sorted(scene.belief.held)))
+    if key not in scene.cache:
+        scene.cache[key] = _sweep_problem(ctx, container, start, end)
+    return scene.cache[key]
+
+
+def _sweep_problem(ctx: RobotContext, container: Container, start: float, end: float,
+                   ) -> str | None:
     scene, collisions = ctx.scene, ctx.collisions
     joint = container.joint
     kind = scene.kitchen.joints[joint].kind
