@@ -149,7 +149,7 @@ def test_a_monitor_brakes_the_base_where_its_condition_fires(robot, tmp_path) ->
     assert _node(robot, "Monitor")["status"] == "failed"
 
 
-@pytest.mark.parametrize("after_s", [0.3, 0.5, 0.7])
+@pytest.mark.parametrize("after_s", [0.2, 0.3, 0.5, 0.7])
 def test_a_monitor_that_fires_early_in_a_turning_drive_stops_it_short(robot, tmp_path,
                                                                       after_s) -> None:
     """(A red-team pass: fired 0.5 s into the drive to the origin, which turns as it
@@ -167,6 +167,34 @@ def test_a_monitor_that_fires_early_in_a_turning_drive_stops_it_short(robot, tmp
     robot.trace.close()
     found = [f for f in physics_findings(read_trace(path))
              if f.kind in ("base acceleration", "yaw acceleration")]
+    assert found == [], [f.describe() for f in found]
+
+
+def test_an_arm_motion_braked_at_any_time_stays_within_the_joint_limits(robot,
+                                                                       tmp_path) -> None:
+    """Braking checked its last step to rest over the whole step, the trace check over
+    half of it: braked on the path's own states (far apart as it slows), an elbow reached
+    14.3 rad/s^2 of its 13.2."""
+    from cramlite.designators import MoveArmJointsMotion
+
+    out = {"r_shoulder_pan_joint": -1.0, "r_shoulder_lift_joint": 0.3,
+           "r_elbow_flex_joint": -0.5, "l_shoulder_pan_joint": 1.0,
+           "l_shoulder_lift_joint": 0.3, "l_elbow_flex_joint": -0.5}
+    path = tmp_path / "arms.jsonl"
+    robot.open_trace(path, "v1", "test", "none", 0, "kinematic")
+    ParkArmsAction().perform(robot)
+    fired = 0
+    for after_s in (0.0, 0.05, 0.3, 0.8):
+        MoveArmJointsMotion(out).perform(robot)
+        start = robot.time_s
+        try:
+            Monitor(lambda state, start=start, after_s=after_s: state.t > start + after_s,
+                    ParkArmsAction()).perform(robot)
+        except MonitorFired:
+            fired += 1
+    robot.trace.close()
+    assert fired == 4
+    found = [f for f in physics_findings(read_trace(path)) if "acceleration" in f.kind]
     assert found == [], [f.describe() for f in found]
 
 

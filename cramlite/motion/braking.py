@@ -88,7 +88,9 @@ def _fd_accel_vectors(p: np.ndarray, t: np.ndarray) -> np.ndarray:
     dt = np.maximum(np.diff(t), 1e-9)
     v = np.diff(p, axis=0) / dt[:, None]
     v = np.vstack([v, np.zeros((1, p.shape[1]))])
-    gap = np.concatenate([(dt[:-1] + dt[1:]) / 2, [dt[-1]]])
+    # (to rest over half the last step: between its middle and its end, as the trace
+    # check counts it; over the whole step, braking passed twice what the check allows)
+    gap = np.concatenate([(dt[:-1] + dt[1:]) / 2, [dt[-1] / 2]])
     return np.diff(v, axis=0) / gap[:, None]
 
 
