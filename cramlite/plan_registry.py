@@ -39,9 +39,10 @@ class PlanCrashed(Exception):
 def crashed(name: str, exc: BaseException) -> PlanCrashed:
     """The PlanCrashed that names plan `name`, what it raised and the last line of code
     outside cramlite that it ran (the user's own, where the bug most likely is)."""
-    package = str(Path(__file__).resolve().parent)
+    package = Path(__file__).resolve().parent
     frames = [f for f in traceback.extract_tb(exc.__traceback__)
-              if not str(Path(f.filename).resolve()).startswith(package)]
+              if Path(f.filename).is_file()  # (not "<string>": a dataclass's own __init__)
+              and not Path(f.filename).resolve().is_relative_to(package)]
     where = f" (at {frames[-1].filename}, line {frames[-1].lineno})" if frames else ""
     return PlanCrashed(f"plan {name} raised {type(exc).__name__}: {exc}{where}")
 

@@ -108,6 +108,9 @@ def test_a_gripper_holds_only_what_is_between_its_fingers_and_opens_only_to_let_
             MoveGripperMotion(arm, "open").perform(ctx)
         with pytest.raises(GraspFailed, match="already in the"):
             AttachMotion("right" if arm == "left" else "left", "cup").perform(ctx)
+        other = "right" if arm == "left" else "left"
+        with pytest.raises(GraspFailed, match=f"not in the {other} hand \\(in the {arm} hand"):
+            DetachMotion(other, "cup").perform(ctx)
         DetachMotion(arm, "cup").perform(ctx)  # (in the air: the trace check says so)
         assert ctx.holding == {} and ctx.scene.belief.held == {}
         ctx.record_state()

@@ -126,6 +126,15 @@ def test_a_bug_in_a_plan_is_one_line_naming_where_and_a_bench_row(tmp_path: Path
     assert "Traceback" not in done.stderr and len(done.stderr.splitlines()) == 1, done.stderr
     assert (f"--plan: plan {plan} raised ZeroDivisionError: division by zero (at "
             f"{tmp_path / 'buggy.py'}, line 3)") in done.stderr, done.stderr
+    # (a designator refusing its argument where the plan writes it: the plan's line, not
+    # the "<string>" of the dataclass's own __init__)
+    (tmp_path / "badarg.py").write_text("from cramlite import ParkArmsAction\n\n\n"
+                                        "def plan(ctx, setup, strategy):\n"
+                                        "    ParkArmsAction('middle').perform(ctx)\n")
+    done = run_cli("run", "v1", "--plan", f"{tmp_path / 'badarg.py'}:plan", "--backend",
+                   "kinematic")
+    assert done.returncode == 2 and f"(at {tmp_path / 'badarg.py'}, line 5)" in done.stderr, \
+        done.stderr
     out = tmp_path / "b"
     bench = run_cli("bench", "--setups", "v1", "--plan", plan, "--strategies", "opm",
                     "--trials", "1", "--backend", "kinematic", "--out", str(out), "--no-plots")

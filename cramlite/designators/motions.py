@@ -394,6 +394,10 @@ class DetachMotion:
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
+        held = ctx.scene.belief.held.get(self.obj)
+        if held is None or held.arm != self.arm:
+            where = "in no hand" if held is None else f"in the {held.arm} hand"
+            raise GraspFailed(f"not in the {self.arm} hand ({where})", obj=self.obj)
         ctx.modules.detach(self.arm, self.obj)
         ctx.scene.detach(self.obj)
         holding = ctx.holding.get(self.arm)
