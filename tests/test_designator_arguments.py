@@ -166,3 +166,16 @@ def test_failures_say_what_is_in_the_way() -> None:
         with pytest.raises(ObjectUnreachable, match="drawer_1, which holds it, is closed: "
                                                     r"OpenAction\('drawer_1'\) first"):
             PickUpAction("spoon").perform(ctx)
+
+
+@pytest.mark.parametrize(("field", "value"), [("turn_accel_rad_s2", math.nan),
+                                              ("drive_accel_m_s2", 0.0),
+                                              ("drive_speed_m_s", -1.0),
+                                              ("max_candidates", 0)])
+def test_execution_options_that_no_motion_could_follow_are_refused(field, value) -> None:
+    """(A NaN acceleration left braking no profile to fit, and it said the motion was
+    near its end.)"""
+    from cramlite.designators import ExecutionOptions
+
+    with pytest.raises(ValueError, match=f"ExecutionOptions.{field}: expected"):
+        ExecutionOptions(**{field: value})

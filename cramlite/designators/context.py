@@ -82,6 +82,22 @@ class ExecutionOptions:
     #: the other, as before.
     parallel_motion: bool = True
 
+    def __post_init__(self) -> None:
+        """Speeds, accelerations, tolerances and times are positive finite numbers (a NaN
+        acceleration left braking no profile to fit); counts are whole numbers >= 1."""
+        for name in ("place_tolerance_m", "yaw_tolerance_deg", "settle_s", "drive_speed_m_s",
+                     "turn_speed_rad_s", "drive_accel_m_s2", "turn_accel_rad_s2",
+                     "joint_speed_scale", "handle_speed_m_s", "handle_accel_m_s2"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) or \
+                    not math.isfinite(value) or value <= 0:
+                raise ValueError(f"ExecutionOptions.{name}: expected a finite number > 0, "
+                                 f"got {value!r}")
+        if isinstance(self.max_candidates, bool) or not isinstance(self.max_candidates, int) \
+                or self.max_candidates < 1:
+            raise ValueError(f"ExecutionOptions.max_candidates: expected a whole number >= 1, "
+                             f"got {self.max_candidates!r}")
+
     @property
     def base_limits(self) -> BaseLimits:
         return BaseLimits(self.drive_speed_m_s, self.turn_speed_rad_s, self.drive_accel_m_s2,
