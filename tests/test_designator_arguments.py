@@ -62,7 +62,8 @@ def test_a_move_motion_through_the_counter_is_refused_and_nothing_moves() -> Non
         with pytest.raises(NavigationFailed, match=r"not free: the base would not fit at \("):
             MoveMotion([(2.0, 0.0, 0.0)]).perform(ctx)
         assert tuple(ctx.scene.base) == start and ctx.time_s == 0.0
-        with pytest.raises(ValueError, match="waypoint 0: expected finite numbers"):
+        with pytest.raises(ValueError,
+                           match=r"waypoint 0 \(x, y, yaw\): expected 3 finite numbers"):
             MoveMotion([(math.nan, 0.0, 0.0)]).perform(ctx)
 
 

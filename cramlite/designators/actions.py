@@ -252,7 +252,6 @@ class PickUpAction(ActionDesignator):
             MoveArmJointsMotion(reach.joints).perform(ctx)
             MoveGripperMotion(reach.arm, "open", (name,)).perform(ctx)
             DetachMotion(reach.arm, name).perform(ctx)
-            ctx.holding.pop(reach.arm, None)  # (DetachMotion emptied it)
             MoveArmJointsMotion(reach.pre_joints, (name,)).perform(ctx)
         except PlanFailure:
             ctx.note(f"could not put {name} down again after a failed lift")
@@ -302,7 +301,6 @@ class PlaceAction(ActionDesignator):
         touch = (obj.name,)
         MoveGripperMotion(arm, "open", touch).perform(ctx)
         DetachMotion(arm, obj.name).perform(ctx)
-        ctx.holding.pop(arm, None)  # (DetachMotion emptied it)
         ctx.settle([obj.name])
         ctx.record_state()
         MoveArmJointsMotion(reach.post_joints, touch).perform(ctx)  # retreat
@@ -621,7 +619,6 @@ class TransportAction(ActionDesignator):
         except PlanFailure as failure:
             if arm in ctx.holding:
                 DetachMotion(arm, obj.name).perform(ctx)
-                ctx.holding.pop(arm, None)  # (DetachMotion emptied it)
                 ctx.settle([obj.name])
                 ctx.note(f"let go of {obj.name} (could not put it back: {failure.reason})")
             return False

@@ -23,6 +23,7 @@ from cramlite.designators.failures import (
     NavigationFailed,
     ObjectNotFound,
     ObjectUnreachable,
+    finite_numbers,
 )
 from cramlite.designators.grasps import in_base_frame
 from cramlite.designators.tasks import recorded
@@ -37,7 +38,7 @@ from cramlite.motion.trajectory import (
 )
 from cramlite.scene.gripper import gripper_geometry
 from cramlite.scene.models import pr2_model
-from cramlite.scene.scene import shape_corners
+from cramlite.scene.scene import shape_corners, tool_frame
 
 BasePose = tuple[float, float, float]
 #: The finger joint the others of a gripper follow (see the URDF's mimic tags).
@@ -254,15 +255,8 @@ def _free_base_path(ctx: RobotContext, waypoints: Sequence[BasePose]) -> list[Ba
     """The path from the base's pose through `waypoints`, densified and every pose of it
     free (a path given by hand ran through the counter, and one that did not start
     where the base stood made it jump)."""
-    points: list[BasePose] = []
-    for i, waypoint in enumerate(waypoints):
-        try:
-            x, y, yaw = (float(v) for v in waypoint)
-        except (TypeError, ValueError):
-            raise ValueError(f"waypoint {i}: expected x, y, yaw, got {waypoint!r}") from None
-        if not all(math.isfinite(v) for v in (x, y, yaw)):
-            raise ValueError(f"waypoint {i}: expected finite numbers, got {waypoint!r}")
-        points.append((x, y, yaw))
+    points: list[BasePose] = [finite_numbers(waypoint, 3, f"waypoint {i} (x, y, yaw)")
+                              for i, waypoint in enumerate(waypoints)]
     if not points:
         raise ValueError("expected at least one waypoint")
     here = tuple(float(v) for v in ctx.scene.base)
@@ -415,7 +409,7 @@ ATTACH_REACH_M = 0.03
 def _tool_gap_m(ctx: RobotContext, arm: str, obj: str) -> float:
     """The distance from the gripper's tool frame to the object's bounds (its own frame:
     0 inside them)."""
-    tool = ctx.scene.link_matrix(f"{arm_prefix(arm)}_gripper_tool_frame")[:3, 3]
+    tool = ctx.scene.link_matrix(tool_frame(arm))[:3, 3]
     frame = ctx.scene.item_matrix(obj)
     local = frame[:3, :3].T @ (tool - frame[:3, 3])
     corners = np.vstack([shape_corners(shape, shape.in_link)

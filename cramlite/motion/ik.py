@@ -165,6 +165,7 @@ class ArmIK:
         wrist_bound = _chain_length(model, shoulder, wrist)
         rng = np.random.default_rng(0)
         reach = wrist_reach = 0.0
+        shoulder_at = in_tool = np.zeros(3)
         for k in range(501):
             q = pin.neutral(model) if k == 0 else self.random_q(rng)
             if self._torso is not None:
@@ -176,10 +177,12 @@ class ArmIK:
             # (np.linalg.norm's own arithmetic, without its checks: 500 samples an arm)
             reach = max(reach, math.sqrt(tool.dot(tool)))
             wrist_reach = max(wrist_reach, math.sqrt(to_wrist.dot(to_wrist)))
-            in_tool = data.oMf[self.frame_id].actInv(data.oMi[wrist]).translation.copy()
-            if k == 0 and reach >= tool_bound - 1e-12 and wrist_reach >= wrist_bound - 1e-12:
-                break  # (the neutral configuration is the farthest there is)
-        return data.oMi[shoulder].translation.copy(), reach + 0.02, in_tool, wrist_reach + 0.02
+            if k == 0:  # (the shoulder and the wrist in the tool frame: the same in any)
+                shoulder_at = data.oMi[shoulder].translation.copy()
+                in_tool = data.oMf[self.frame_id].actInv(data.oMi[wrist]).translation.copy()
+                if reach >= tool_bound - 1e-12 and wrist_reach >= wrist_bound - 1e-12:
+                    break  # (the neutral configuration is the farthest there is)
+        return shoulder_at, reach + 0.02, in_tool, wrist_reach + 0.02
 
     def out_of_reach(self, target: pin.SE3, fixed_torso_m: float | None = None) -> bool:
         """Is the target surely out of reach of the fingers or of the wrist, at the given

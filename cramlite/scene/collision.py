@@ -90,7 +90,6 @@ class Contact:
         return f"{self.what} {depth_text(self.depth_m)} inside {self.other}"
 
 
-
 @dataclass(frozen=True)
 class _Part:
     label: str

@@ -372,7 +372,7 @@ class TraceChecker:
         return self._pair_cache[key]
 
     def _checked(self, a: _Body, b: _Body, held: dict[str, str], manipulated: str | None,
-                 moved: set[str], swung: set[str] = frozenset()) -> bool:
+                 moved: set[str], swung: set[str]) -> bool:
         kinds = (a.kind, b.kind)
         if kinds == ("robot", "robot"):
             return (a.owner, b.owner) in self.self_pairs or (b.owner, a.owner) in self.self_pairs

@@ -115,7 +115,7 @@ def resolve_setup_path(setup: str | Path) -> Path:
     text = str(setup)
     if isinstance(setup, str) and text and "/" not in text and "\\" not in text:
         shipped = worlds_dir() / "setups" / f"{text}.yaml"
-        if text in builtin_setup_names() and shipped.is_file():
+        if shipped.is_file():
             return shipped
     path = Path(text)
     if path.exists():
