@@ -1,5 +1,3 @@
-import sys
+from cramlite.cli import console
 
-from cramlite.cli import main
-
-sys.exit(main())
+console()
