@@ -19,6 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pinocchio as pin
 
+from cramlite.designators.container_fit import check_fits
 from cramlite.designators.context import Holding, RobotContext, carried_map
 from cramlite.designators.failures import (
     GraspFailed,
@@ -358,16 +359,19 @@ class TransportAction(ActionDesignator):
         )
 
         obj = as_object(self.object, ctx)
-        if self.target is not None:  # (before anything moves)
-            check_resting_place(ctx, obj.name, self.target)
-        ParkArmsAction().perform(ctx)
-        source = container_of(ctx, obj.name)
-        if source is not None and not is_open(ctx, source):
-            OpenAction(source.name).perform(ctx)  # stored: open its drawer or cupboard first
         # a target inside a container is where it is when the container is closed; it
         # rides along with a drawer as that opens
         destination, local = (container_at(ctx, self.target) if self.target is not None
                               else (None, None))
+        if self.target is not None:  # (before anything moves)
+            check_resting_place(ctx, obj.name, self.target)
+            if destination is not None:  # (at the places around it a transport tries)
+                spots = PlacingLocation(obj, target=self.target).spots(ctx)
+                check_fits(ctx, obj.name, self.target, spots, destination, self.target_yaw)
+        ParkArmsAction().perform(ctx)
+        source = container_of(ctx, obj.name)
+        if source is not None and not is_open(ctx, source):
+            OpenAction(source.name).perform(ctx)  # stored: open its drawer or cupboard first
         target = self.target
         if destination is not None and is_open(ctx, destination):
             target = _at(ctx, destination, local)

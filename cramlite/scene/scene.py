@@ -412,6 +412,12 @@ class PlanningScene:
                 return container, tuple(float(v) for v in local)
         return None, None
 
+    def inside_yaw(self, container: Container) -> float:
+        """The yaw of a container's inside frame in the world (as it is closed: a drawer
+        slides, the inside of a cupboard stays)."""
+        frame = self.kitchen_frames({container.joint: 0.0})[container.inside_link]
+        return math.atan2(frame[1, 0], frame[0, 0])
+
     def inside_point(self, container: Container, local: Sequence[float]) -> Vec3:
         """A point given in a container's inside frame, in the world as believed."""
         frame = self.kitchen_frames()[container.inside_link]

@@ -9,7 +9,6 @@ was expected.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable
 
 import numpy as np
@@ -19,6 +18,7 @@ from cramlite.scene.collision import SceneCollisions
 from cramlite.scene.models import Shape
 from cramlite.scene.scene import FLOOR_LINK, PlanningScene, shape_corners
 from cramlite.scene.transforms import pose_matrix, yaw_quat
+from cramlite.world.containers import turned_halves
 from cramlite.world.pr2 import PARK_JOINTS
 from cramlite.world.setup import ItemSpec, Setup
 
@@ -187,8 +187,7 @@ def _check_in_container(scene: PlanningScene, spec: ItemSpec, src: str, where: s
                          source=src, field=f"{where}.in")
     local = scene._inside_local(container, spec.pose.xyz, {container.joint: 0.0})
     ex, ey, ez = scene.items[spec.name].extents
-    c, s = abs(math.cos(spec.pose.yaw)), abs(math.sin(spec.pose.yaw))
-    half_x, half_y = (c * ex + s * ey) / 2, (s * ex + c * ey) / 2
+    half_x, half_y = turned_halves((ex, ey), spec.pose.yaw - scene.inside_yaw(container))
     if not container.fits(tuple(local), half_x, half_y, ez):
         (x0, y0, z0), (x1, y1, z1) = container.inside_min, container.inside_max
         frame = scene.kitchen_frames({container.joint: 0.0})[container.inside_link]

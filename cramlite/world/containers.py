@@ -10,6 +10,7 @@ is what items stand on; for a drawer it moves with the drawer).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -37,13 +38,29 @@ class Container:
     inside_max: Vec3
     open_value: float  #: joint value when open
 
-    def fits(self, local: Vec3, half_x: float, half_y: float, height: float) -> bool:
+    def fits(self, local: Vec3, half_x: float, half_y: float, height: float,
+             slack: float = 0.0) -> bool:
         """Does an item standing at `local` (its bottom centre, in the inside link's frame,
-        axis-aligned half sizes) fit inside?"""
+        axis-aligned half sizes) fit inside (within `slack` of its walls and top)?"""
         (x0, y0, z0), (x1, y1, z1) = self.inside_min, self.inside_max
         x, y, z = local
-        return (x0 <= x - half_x and x + half_x <= x1 and y0 <= y - half_y
-                and y + half_y <= y1 and abs(z - z0) <= 0.01 and z + height <= z1)
+        return (x0 - slack <= x - half_x and x + half_x <= x1 + slack
+                and y0 - slack <= y - half_y and y + half_y <= y1 + slack
+                and abs(z - z0) <= 0.01 and z + height <= z1 + slack)
+
+    def describe_inside(self) -> str:
+        """Its inside's size, as messages give it."""
+        (x0, y0, z0), (x1, y1, z1) = self.inside_min, self.inside_max
+        return f"{x1 - x0:.2f} x {y1 - y0:.2f} m and {z1 - z0:.2f} m tall"
+
+
+def turned_halves(extents: Sequence[float], yaw: float) -> tuple[float, float]:
+    """Half sizes along x and y of the axis-aligned bounds of a box of these extents
+    turned by `yaw` about z (a box fits in an axis-aligned one exactly when its bounds
+    do)."""
+    c, s = abs(math.cos(yaw)), abs(math.sin(yaw))
+    ex, ey = extents[0], extents[1]
+    return (c * ex + s * ey) / 2, (s * ex + c * ey) / 2
 
 
 def containers_path(world_urdf: Path) -> Path:
