@@ -170,7 +170,7 @@ class NavigateAction(ActionDesignator):
                    else "the base does not fit where it stands")
             raise NavigationFailed(f"no collision-free base path to ({x:.2f}, {y:.2f}, "
                                    f"{math.degrees(yaw):.0f} deg): {why}")
-        MoveMotion(path.waypoints, _checked=True).perform(ctx)
+        MoveMotion._along_checked(path.waypoints).perform(ctx)
         return tuple(ctx.scene.base)  # (where the base ended, as the modules report it)
 
     def validate(self, ctx: RobotContext, result: object = None) -> None:

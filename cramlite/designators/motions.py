@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -238,8 +238,15 @@ class MoveMotion:
 
     waypoints: Sequence[BasePose]
     #: The waypoints are a path the base planner checked from where the base stands (as
-    #: NavigateAction's are): not checked again.
-    _checked: bool = False
+    #: NavigateAction's are): not checked again. (Not an argument: `_along_checked`.)
+    _checked: bool = field(default=False, init=False, repr=False, compare=False)
+
+    @classmethod
+    def _along_checked(cls, waypoints: Sequence[BasePose]) -> MoveMotion:
+        """A drive along a path the base planner checked from where the base stands."""
+        motion = cls(waypoints)
+        object.__setattr__(motion, "_checked", True)
+        return motion
 
     @recorded
     def perform(self, ctx: RobotContext) -> None:
