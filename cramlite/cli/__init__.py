@@ -126,7 +126,9 @@ def console() -> NoReturn:
     would be waited for), or `main` raises, the exit is the normal one.
     """
     code = main()
-    if _others_running() or not hasattr(atexit, "_run_exitfuncs"):
+    code = 0 if code is None else code  # (as `sys.exit(None)` would)
+    if not isinstance(code, int) or _others_running() or not hasattr(atexit,
+                                                                       "_run_exitfuncs"):
         sys.exit(code)
     atexit._run_exitfuncs()  # (what `sys.exit` would run before the teardown)
     for stream in (sys.stdout, sys.stderr):
