@@ -47,6 +47,7 @@ from cramlite.designators.motions import (
     MoveGripperMotion,
     MoveMotion,
     MoveTorsoMotion,
+    check_payload,
     gripper_joints,
 )
 from cramlite.designators.objects import ObjectDesignator, ObjectDesignatorDescription, as_object
@@ -209,6 +210,7 @@ class PickUpAction(ActionDesignator):
             raise GraspFailed("already held" + (f" in the {hand} hand: put it down with "
                                                 "PlaceAction first" if hand else ""),
                               obj=obj.name)
+        check_payload(ctx, obj.name)  # (before anything moves)
         reach = self.reach or self._resolve(ctx, obj)
         if reach.arm in ctx.holding:
             raise GraspFailed(f"the {reach.arm} hand is not free", obj=obj.name)
@@ -363,7 +365,8 @@ class TransportAction(ActionDesignator):
         # rides along with a drawer as that opens
         destination, local = (container_at(ctx, self.target) if self.target is not None
                               else (None, None))
-        if self.target is not None:  # (before anything moves)
+        check_payload(ctx, obj.name)  # (before anything moves)
+        if self.target is not None:
             check_resting_place(ctx, obj.name, self.target)
             if destination is not None:  # (at the places around it a transport tries)
                 spots = PlacingLocation(obj, target=self.target).spots(ctx)

@@ -39,6 +39,7 @@ from cramlite.motion.trajectory import (
 from cramlite.scene.gripper import gripper_geometry
 from cramlite.scene.models import pr2_model
 from cramlite.scene.scene import shape_corners, tool_frame
+from cramlite.world.pr2 import ATTACH_REACH_M, HAND_PAYLOAD_KG
 
 BasePose = tuple[float, float, float]
 #: The finger joint the others of a gripper follow (see the URDF's mimic tags).
@@ -364,8 +365,9 @@ class MoveGripperMotion:
 @dataclass(frozen=True)
 class AttachMotion:
     """The object moves with the gripper from now on. It must be between the gripper's
-    fingers (its tool frame within `ATTACH_REACH_M` of the object's bounds) and in no
-    other hand: a gripper does not hold what it does not reach (GraspFailed)."""
+    fingers (its tool frame within `ATTACH_REACH_M` of the object's bounds), in no other
+    hand and no heavier than a hand may hold (`HAND_PAYLOAD_KG`): a gripper does not hold
+    what it does not reach or cannot lift (GraspFailed)."""
 
     arm: str
     obj: str
@@ -378,6 +380,7 @@ class AttachMotion:
         other = ctx.scene.belief.held.get(self.obj)
         if other is not None and other.arm != self.arm:
             raise GraspFailed(f"already in the {other.arm} hand", obj=self.obj)
+        check_payload(ctx, self.obj)
         gap = _tool_gap_m(ctx, self.arm, self.obj)
         if gap > ATTACH_REACH_M:
             raise GraspFailed(f"{gap:.2f} m from the {self.arm} gripper's fingers: it holds "
@@ -408,9 +411,16 @@ class DetachMotion:
         ctx.footprint_stale = True
 
 
-#: How far the tool frame (between the fingertips) may be from an object's bounds for
-#: the gripper to hold it (its fingers are 4 cm long).
-ATTACH_REACH_M = 0.03
+
+
+def check_payload(ctx: RobotContext, obj: str) -> None:
+    """GraspFailed if the object is heavier than one of the PR2's hands may hold
+    (`HAND_PAYLOAD_KG`, from its URDF's masses): a red-team setup's 50 kg box was carried
+    one-handed."""
+    mass = ctx.scene.items[obj].model.mass_kg
+    if mass > HAND_PAYLOAD_KG:
+        raise GraspFailed(f"{mass:g} kg, more than a hand of the PR2 may hold "
+                          f"({HAND_PAYLOAD_KG:g} kg)", obj=obj)
 
 
 def _tool_gap_m(ctx: RobotContext, arm: str, obj: str) -> float:

@@ -63,3 +63,6 @@ TORSO_UP_M = 0.25
 #: What one PR2 hand may hold (kg): the PR2's rated payload per arm (Willow Garage's
 #: specification, 1.8 kg). With two items carried each is held by its own hand.
 HAND_PAYLOAD_KG = 1.8
+#: How far the tool frame (between the fingertips) may be from an object's bounds for
+#: the gripper to hold it (its fingers are 4 cm long).
+ATTACH_REACH_M = 0.03
