@@ -140,6 +140,7 @@ class TrialRunner:
         if trace is not None:
             ctx.open_trace(trace, self.setup_reference(), plan, strategy, seed,
                            self.backend.name)
+        ended = False  # (the plan ran to its end, or failed as plans fail: the trace is whole)
         try:
             start = time.perf_counter()
             try:
@@ -152,9 +153,10 @@ class TrialRunner:
                 raise crashed(plan, exc) from exc
             ctx.flush_deferred()  # (a motion the plan deferred to a drive that never came)
             wall_s = time.perf_counter() - start
+            ended = True
         finally:
             if ctx.trace is not None:
-                ctx.trace.close()
+                ctx.trace.close(complete=ended)
         report = _as_report(report, plan)
         items, success = self._check(plan)
         actions = ctx.tasks.as_list()

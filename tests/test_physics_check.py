@@ -85,7 +85,8 @@ def test_a_jump_of_the_base_is_found(trace) -> None:
     i = moving[len(moving) // 2]
     bad.states[i]["base"][0] += 0.05  # 5 cm aside in one step of a drive
     found = physics_findings(bad)
-    assert found and {f.kind for f in found} == {"base acceleration"}
+    # (and, 5 cm in a step of ~30 ms, faster than the base drives)
+    assert found and {f.kind for f in found} == {"base acceleration", "base speed"}
     assert any(abs(f.line - (i + 2)) <= 1 for f in found)
 
 
@@ -242,3 +243,130 @@ def test_an_item_whose_support_is_taken_away_is_found(trace) -> None:
     assert [(f.kind, f.what, f.line) for f in found] == [
         ("support", "milk rests on nothing", first_cup + 2)], found
     assert found[0].value == pytest.approx(top * 100, abs=0.15), found[0].value
+
+
+def test_a_held_item_away_from_its_fingers_or_in_the_other_hand_is_found(trace) -> None:
+    """(A red-team trace carried the cup 50 cm beside the hand, another said the right
+    hand held the cup the left one carried: both passed.)"""
+    held = _held_states(trace, "cup")
+    beside = copy.deepcopy(trace)
+    for i in held:
+        beside.states[i]["objects"]["cup"][1] += 0.5
+    found = [f for f in physics_findings(beside) if f.kind == "hold"]
+    assert [f.what.split(",")[0] for f in found] == [
+        f"cup held by the {trace.states[held[0]]['held']['cup']} hand"], found
+    assert found[0].value == pytest.approx(50, abs=5) and found[0].limit == 3
+    assert found[0].line == held[0] + 2
+    other = copy.deepcopy(trace)
+    for i in held:
+        arm = other.states[i]["held"]["cup"]
+        other.states[i]["held"]["cup"] = "left" if arm == "right" else "right"
+    assert [f.kind for f in physics_findings(other) if f.kind == "hold"] == ["hold"]
+
+
+def test_a_held_item_heavier_than_a_hand_may_hold_is_found(trace) -> None:
+    from dataclasses import replace
+
+    from cramlite.trace.check import checker_for
+
+    checker = checker_for(trace)
+    checker.items["cup"] = replace(checker.items["cup"], mass_kg=50.0)
+    found = [f for f in physics_findings(trace, checker) if f.kind == "payload"]
+    assert [(f.what, f.value, f.limit, f.unit) for f in found] == [
+        (f"cup held by the {trace.states[_held_states(trace, 'cup')[0]]['held']['cup']} "
+         "hand", 50.0, 1.8, "kg")]
+
+
+def test_an_item_no_hand_holds_moves_only_by_falling(trace) -> None:
+    """(A red-team trace slid a cup nobody held 30 cm along the counter and back.)"""
+    first = _held_states(trace, "cup")[0]
+    slid = copy.deepcopy(trace)
+    for state in slid.states[first // 3:first // 2]:
+        state["objects"]["cup"][1] -= 0.3
+    found = [f for f in physics_findings(slid) if f.kind == "unheld"]
+    assert [(f.what, f.line) for f in found] == [
+        ("cup moved with no hand holding it", first // 3 + 2)], found
+    assert found[0].value == pytest.approx(30, abs=0.1)
+    lifted = copy.deepcopy(trace)  # (5 cm up, nothing lifting it)
+    for state in lifted.states[first // 3:first // 2]:
+        state["objects"]["cup"][2] += 0.05
+    assert [f.kind for f in physics_findings(lifted) if f.kind == "unheld"] == ["unheld"]
+    # falling is possible: 20 cm down, 5 cm aside on landing (the support check judges
+    # where it comes to rest)
+    dropped = copy.deepcopy(trace)
+    for state in dropped.states[:first // 3]:
+        state["objects"]["cup"][2] += 0.20
+        state["objects"]["cup"][0] += 0.05
+    assert not [f for f in physics_findings(dropped) if f.kind == "unheld"]
+
+
+def test_speeds_beyond_the_limits_are_found(trace) -> None:
+    """(A red-team trace raised the torso at 0.111 m/s, 12 times its 0.013; the base's
+    speed was checked only through its accelerations.)"""
+    joints = trace.header["joints"]
+    torso = joints.index("torso_lift_joint")
+    fast = copy.deepcopy(trace)
+    start = fast.states[0]["q"][torso]
+    for state in fast.states:
+        state["q"][torso] = start + 12 * (state["q"][torso] - start)
+    found = [f for f in physics_findings(fast) if f.kind == "joint speed"]
+    assert [f.what for f in found] == ["torso_lift_joint"], found
+    assert found[0].value > 10 * found[0].limit and found[0].unit == "m/s"
+    slow = copy.deepcopy(trace)
+    slow.header["base_limits"]["speed_m_s"] = 0.1
+    found = [f for f in physics_findings(slow) if f.kind == "base speed"]
+    assert [f.what for f in found] == ["driving"] and found[0].limit == 0.1
+    assert not [f for f in physics_findings(trace) if "speed" in f.kind]
+
+
+def test_a_trace_cut_short_is_found_and_an_older_one_is_not_suspected(trace) -> None:
+    """A trace's last state is written once more marked "end" when the trial ran to its
+    end; without it (interrupted, lines lost) the trace is cut short. A trace from before
+    the mark (its header does not promise it) is judged as it was."""
+    from cramlite.trace import Trace
+
+    assert trace.header["end_marked"] is True and trace.states[-1]["end"] is True
+    assert not trace.cut_short
+    cut = Trace(trace.header, trace.states[:len(trace.states) // 2])
+    found = physics_findings(cut)
+    # (and no acceleration to rest after its last state: it did not stop there)
+    assert [(f.kind, f.line) for f in found] == [("cut short", len(cut.states) + 1)], found
+    assert "interrupted, or lines were lost" in found[0].describe()
+    older = Trace({k: v for k, v in trace.header.items() if k != "end_marked"},
+                  trace.states[:-1])
+    assert physics_findings(older) == []
+
+
+def test_an_interrupted_plan_leaves_a_trace_cut_short(tmp_path) -> None:
+    plan = tmp_path / "stops.py"
+    plan.write_text("from cramlite import ParkArmsAction, MoveTorsoAction\n\n"
+                    "def stops(ctx, setup, strategy):\n"
+                    "    MoveTorsoAction(0.2).perform(ctx)\n"
+                    "    raise KeyboardInterrupt\n")
+    path = tmp_path / "stops.jsonl"
+    done = run_cli("run", "v1", "--plan", f"{plan}:stops", "--backend", "kinematic",
+                   "--trace", str(path))
+    assert done.returncode == 130, done.stderr
+    checked = run_cli("replay", str(path), "--check")
+    assert checked.returncode == 1
+    assert "not physical: cut short" in checked.stdout, checked.stdout
+
+
+@pytest.mark.parametrize(("edit", "expected"), [
+    ("drop", "line 4: objects: cup missing (every state lists the objects of the first"),
+    ("after", "line 5: a state after the trace's end"),
+    ("end", "line 4: end: expected true")])
+def test_a_state_without_an_object_or_after_the_end_is_malformed(trace, tmp_path, edit,
+                                                                 expected) -> None:
+    states = copy.deepcopy(trace.states[:3])
+    if edit == "drop":
+        del states[2]["objects"]["cup"]
+    elif edit == "after":
+        states[2]["end"] = True
+        states.append(copy.deepcopy(trace.states[3]))
+    else:
+        states[2]["end"] = "yes"
+    path = tmp_path / "bad.jsonl"
+    path.write_text("\n".join(json.dumps(r) for r in [trace.header, *states]) + "\n")
+    done = run_cli("replay", str(path), "--check")
+    assert done.returncode == 2 and expected in done.stderr, done.stderr

@@ -57,13 +57,13 @@ def test_a_motion_into_the_robot_itself_is_refused_and_the_trace_check_finds_it(
     assert result.success
     recorded = read_trace(trace)
     joints = recorded.header["joints"]
-    state = dict(recorded.states[-1])
+    state = {k: v for k, v in recorded.states[-1].items() if k != "end"}
     q = list(state["q"])
     for name, value in ACROSS.items():
         q[joints.index(name)] = value
     bad = tmp_path / "bad.jsonl"
-    lines = trace.read_text().splitlines()
-    bad.write_text("\n".join([lines[0], lines[-1], json.dumps({**state, "q": q,
+    lines = trace.read_text().splitlines()  # (the end: the trace is cut short after it)
+    bad.write_text("\n".join([lines[0], json.dumps(state), json.dumps({**state, "q": q,
                                                                "t": state["t"] + 1.0})]) + "\n")
     found = penetrations(read_trace(bad))
     print([f.describe() for f in found])

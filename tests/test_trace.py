@@ -32,13 +32,14 @@ def write(path: Path, states: list[tuple[float, list[float]]]) -> Path:
 def test_round_trip(tmp_path: Path) -> None:
     path = write(tmp_path / "t.jsonl", [(0.0, [-0.5, -1.8, 1.5708]), (0.5, [-0.5, -1.3, 1.5708])])
     lines = path.read_text().splitlines()
-    assert json.loads(lines[0]) == {"format": TRACE_FORMAT, **header()}
+    assert json.loads(lines[0]) == {"format": TRACE_FORMAT, **header(), "end_marked": True}
     trace = read_trace(path)
-    assert trace.header["joints"] == JOINTS and len(trace.states) == 2
-    assert trace.states[1] == {"t": 0.5, "base": [-0.5, -1.3, 1.5708], "q": [0.25, -1.7],
-                               "w": [], "held": {}, "objects": OBJECTS,
-                               "action": {"name": "NavigateAction", "object": "cup"}}
-    assert trace.duration_s == 0.5
+    # (closed: its last state written once more, marked as the end)
+    assert trace.header["joints"] == JOINTS and len(trace.states) == 3
+    last = {"t": 0.5, "base": [-0.5, -1.3, 1.5708], "q": [0.25, -1.7], "w": [], "held": {},
+            "objects": OBJECTS, "action": {"name": "NavigateAction", "object": "cup"}}
+    assert trace.states[1:] == [last, {**last, "end": True}]
+    assert trace.duration_s == 0.5 and not trace.cut_short
 
 
 GOOD_STATE = {"t": 0.0, "base": [0, 0, 0], "q": [0.25, -1.7], "w": [], "held": {},

@@ -76,8 +76,10 @@ def _replay(args: argparse.Namespace, trace) -> int:
         physics = physics_findings(trace)
         for finding in physics:
             print(f"not physical: {finding.describe()}")
-        print(f"physics (fingers against what they hold, upright items, base and joint "
-              f"accelerations, yaw at the targets, items standing on something): "
+        print(f"physics (fingers against what they hold, held items within the fingers' "
+              f"reach and a hand's payload, upright items, base and joint speeds and "
+              f"accelerations, items moving only in a hand, with their drawer or falling, "
+              f"yaw at the targets, items standing on something, the trace whole): "
               f"{'nothing' if not physics else len(physics)} found")
         status = EXIT_PLAN_FAILED if found or physics else EXIT_OK
     if args.out:
@@ -136,11 +138,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                              "link inside the kitchen, an item or the robot itself, no held "
                              "or standing item inside the kitchen or another item (the real "
                              "meshes; independent of the planner's check); and physics: "
-                             "fingertips at most 2 mm inside what they hold, upright items "
-                             "within their tilt, base accelerations within the header's "
-                             "limits, each joint's acceleration within its velocity limit "
-                             "reached in 0.25 s, items at their targets within 10 degrees of "
-                             "yaw, every item out of the hand standing on something")
+                             "fingertips at most 2 mm inside what they hold, a held item "
+                             "within 3 cm of its gripper and at most 1.8 kg, upright items "
+                             "within their tilt, base speeds and accelerations within the "
+                             "header's limits, each joint's speed within its velocity limit "
+                             "and its acceleration within that limit reached in 0.25 s, "
+                             "items moving only in a hand, with their drawer or by falling, "
+                             "items at their targets within 10 degrees of yaw, every item "
+                             "out of the hand standing on something, the trace not cut "
+                             "short (its end marked)")
     replay.add_argument("--tolerance-cm", default=1.0,
                         type=float_in_range(0, 100, "centimetres > 0 and <= 100",
                                             open_minimum=True),

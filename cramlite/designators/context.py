@@ -588,8 +588,14 @@ def simulated_robot(setup: Setup | Backend | Any, seed: int | np.random.Generato
         ctx = RobotContext(scene=scene, modules=world.modules, rng=rng,
                            options=options or ExecutionOptions())
         ctx.observe()
-        yield ctx
-        ctx.flush_deferred()  # (a motion deferred to a drive that never came)
+        ended = False
+        try:
+            yield ctx
+            ctx.flush_deferred()  # (a motion deferred to a drive that never came)
+            ended = True
+        finally:
+            if ctx.trace is not None:  # (opened with `open_trace`: whole if it ended)
+                ctx.trace.close(complete=ended)
     finally:
         if owned:
             world.close()

@@ -13,6 +13,11 @@ then one line per executed state, in order:
      "q": [...], "w": [...], "held": {object: arm},
      "objects": {name: [x, y, z, qx, qy, qz, qw]},
      "action": {"name": "PickUpAction", "object": "cup"} or null}
+Every state lists the same objects. A header with `"end_marked": true` promises that a
+whole trace ends with its last state written once more with `"end": true` (the trial ran
+to its end: a trace whose writer was interrupted, or which lost its last lines, has no
+such state; `replay --check` says so). Readers that know neither key read the extra state
+as the same state written twice, which moves nothing.
 
 `joints` lists the joints cramlite moves (torso, both arms, every finger joint of both
 grippers); the others keep their default. `t` is the robot's own time. `cramlite-trace/1`
@@ -43,6 +48,8 @@ HEADER_KEYS_2 = ("backend", "cramlite", "robot", "base_limits", "setup_hash")
 STATE_KEYS = ("t", "base", "q", "w", "held", "objects", "action")
 #: The arms that can hold an object in a trace (the PR2's).
 HELD_BY = ("left", "right")
+#: The header's promise that a whole trace ends with a state marked `"end": true`.
+END_MARKED = "end_marked"
 DIGITS = 6
 
 
@@ -70,9 +77,11 @@ class TraceWriter:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._handle = self.path.open("w", encoding="utf-8")
         self._write({"format": TRACE_FORMAT, **{k: header[k] for k in HEADER_KEYS[1:]},
-                     **{k: header[k] for k in HEADER_KEYS_2 if k in header}})
+                     **{k: header[k] for k in HEADER_KEYS_2 if k in header},
+                     END_MARKED: True})
         self.states = 0
         self.last_t = 0.0
+        self._last: dict[str, Any] | None = None
 
     @contextlib.contextmanager
     def _reporting(self) -> Iterator[None]:
@@ -109,9 +118,16 @@ class TraceWriter:
         self._write(record)
         self.states += 1
         self.last_t = t
+        self._last = record
 
-    def close(self) -> None:
+    def close(self, complete: bool = True) -> None:
+        """Close the file; `complete`: what was to be traced ran to its end, marked by the
+        last state written once more with `"end": true` (not after an interruption or a
+        crash: the trace then reads as cut short, which it is)."""
         if self._handle is not None:
+            if complete and self._last is not None:
+                still = {k: v for k, v in self._last.items() if k != "parallel"}
+                self._write({**still, "end": True})
             with self._reporting():
                 self._handle.close()
             self._handle = None
@@ -121,6 +137,11 @@ class TraceWriter:
 class Trace:
     header: dict[str, Any]
     states: list[dict[str, Any]]
+
+    @property
+    def cut_short(self) -> bool:
+        """Its header promises an end mark, and its last state is not one."""
+        return bool(self.header.get(END_MARKED)) and not self.states[-1].get("end")
 
     @property
     def duration_s(self) -> float:
@@ -165,6 +186,15 @@ def read_trace(path: str | Path) -> Trace:
                     header = _check_header(record, fail)
                     continue
                 _check_state(record, header, fail)
+                if states and states[-1].get("end"):
+                    raise fail("a state after the trace's end (the state marked \"end\": "
+                               "true); expected the end last")
+                missing = [n for n in states[0]["objects"] if n not in record["objects"]] \
+                    if states else []
+                if missing:  # (one the first lacks is judged against the setup's items)
+                    raise fail(f"objects: {', '.join(missing)} missing (every state lists "
+                               f"the objects of the first: "
+                               f"{', '.join(states[0]['objects'])})")
                 if record["t"] < last_t:
                     raise fail(f"t = {record['t']} goes back in time (previous {last_t}); "
                                "expected non-decreasing robot time")
@@ -254,6 +284,9 @@ def _check_state(record: dict[str, Any], header: dict[str, Any], fail) -> None:
     unknown = [name for name in held if name not in objects]
     if unknown:
         raise fail(f"held: {unknown[0]!r} is not one of the state's objects")
+    if "end" in record and record["end"] is not True:
+        raise fail(f"end: expected true (the trace's last state) or no end, got "
+                   f"{json.dumps(record['end'])[:40]}")
     action = record["action"]
     if action is not None and not (
             isinstance(action, dict) and isinstance(action.get("name"), str)

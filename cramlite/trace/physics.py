@@ -22,8 +22,19 @@ From the recorded states alone (no planner code):
 - support: an item out of the hand stands on something (a surface, a drawer's or the
   cupboard's inside, another item, the floor) wherever it comes to be: its lowest points
   at most `SUPPORT_GAP_M` above it; one let go in the air is found with its height;
+- speeds: the base's speed and turning rate and each joint's velocity, averaged over each
+  step, within the same limits (an average never exceeds the peak a timed profile keeps
+  to), with `ACCEL_TOLERANCE` and the rounding;
+- hold: a held item's bounds within `ATTACH_REACH_M` of its gripper's tool frame (the
+  hand holds what is between its fingers, not an item beside it or in the other hand's
+  place), and no heavier than `HAND_PAYLOAD_KG`;
+- unheld: an item no hand holds moves only with the drawer or door it stands in, or
+  falls: between two states it may shift `UNHELD_SHIFT_M` (settling), sideways more only
+  as far as it dropped;
 - impossible states: a joint beyond the URDF's limits (as the header states them), an
-  object's quaternion that is not a rotation, a base nowhere near any kitchen.
+  object's quaternion that is not a rotation, a base nowhere near any kitchen;
+- cut short: a header that promises an end mark (`end_marked`) and no state marked
+  `"end": true` last (the trial was interrupted, or the trace lost its last lines).
 
 Each finding names the thing, the value and the limit, the robot time and the trace line.
 """
@@ -37,6 +48,7 @@ import numpy as np
 
 from cramlite.motion.base_timing import BaseLimits
 from cramlite.scene.geometry import placed_bounds
+from cramlite.scene.scene import shape_corners
 from cramlite.scene.transforms import quat_yaw
 from cramlite.trace.check import (
     TraceChecker,
@@ -46,6 +58,7 @@ from cramlite.trace.check import (
     penetration,
 )
 from cramlite.trace.format import Trace
+from cramlite.world.pr2 import ATTACH_REACH_M, HAND_PAYLOAD_KG
 
 GRIP_TOLERANCE_M = 0.002
 #: Finite differences of states that step at most 2 cm may overshoot a profile that keeps
@@ -59,14 +72,18 @@ FINGERTIPS = ("gripper_l_finger_tip_link", "gripper_r_finger_tip_link")
 #: A gripper whose fingers are open this far or wider grips nothing (an open hand that
 #: brushes a handle on its way is a contact, judged by the penetration check).
 OPEN_FINGER_RAD = 0.54
+#: An item no hand holds may shift this much between two states (a physics engine's
+#: settling is under 0.3 mm), sideways more only as far as it dropped (a fall).
+UNHELD_SHIFT_M = 0.01
 
 
 @dataclass(frozen=True)
 class Finding:
     """One thing the robot could not have done so."""
 
-    #: grip | tilt | base acceleration | yaw | support | joint limit | orientation | base |
-    #: header
+    #: grip | tilt | base acceleration | base speed | joint acceleration | joint speed |
+    #: hold | payload | unheld | yaw | support | joint limit | orientation | base | header |
+    #: cut short
     kind: str
     what: str
     value: float
@@ -76,6 +93,8 @@ class Finding:
     line: int
 
     def describe(self) -> str:
+        if self.kind == "cut short":  # (no value to give)
+            return f"{self.kind}: {self.what} (t={self.t:.2f} s, line {self.line})"
         return (f"{self.kind}: {self.what}: {self.value:g} {self.unit} (at most {self.limit:g} "
                 f"{self.unit}) at t={self.t:.2f} s, line {self.line}")
 
@@ -104,6 +123,17 @@ def physics_findings(trace: Trace, checker: TraceChecker | None = None) -> list[
         note(finding)
     for finding in _impossible(trace):
         note(finding)
+    for finding in _speeds(trace):
+        note(finding)
+    for finding in _holds(trace, checker):
+        note(finding)
+    for finding in _unheld(trace, checker):
+        note(finding)
+    if trace.cut_short:
+        last = trace.states[-1]
+        note(Finding("cut short", "the trace stops without the state marked \"end\" its "
+                     "header promises: the trial was interrupted, or lines were lost",
+                     0.0, 0.0, "", float(last["t"]), len(trace.states) + 1))
     return sorted(worst.values(), key=lambda f: (f.kind, -f.value))
 
 
@@ -236,18 +266,25 @@ def _tilts(trace: Trace, checker: TraceChecker):
                               round(math.degrees(limit), 1), "deg", state["t"], i + 2)
 
 
-def _base_accelerations(trace: Trace):
+def _base_limits(trace: Trace) -> tuple[BaseLimits, list[Finding]]:
+    """The PR2's base limits, or the header's where tighter; a header's limit beyond the
+    PR2's is a finding (read_trace checked the header's are numbers > 0)."""
     header = trace.header.get("base_limits") or {}
     pr2 = BaseLimits()
-    values = {}
-    for key in BaseLimits.__dataclass_fields__:  # (the PR2's, or the header's if tighter;
-        own = getattr(pr2, key)  # read_trace checked the header's are numbers > 0)
+    values, findings = {}, []
+    for key in BaseLimits.__dataclass_fields__:
+        own = getattr(pr2, key)
         value = float(header.get(key, own))
         if value > own + 1e-9:
-            yield Finding("header", f"base_limits {key} {value:g} beyond the PR2's {own:g}",
-                          value, own, "", 0.0, 1)
+            findings.append(Finding("header", f"base_limits {key} {value:g} beyond the "
+                                    f"PR2's {own:g}", value, own, "", 0.0, 1))
         values[key] = min(value, own)
-    limits = BaseLimits(**values)
+    return BaseLimits(**values), findings
+
+
+def _base_accelerations(trace: Trace):
+    limits, findings = _base_limits(trace)
+    yield from findings
     states = trace.states
     if len(states) < 2:
         return
@@ -265,6 +302,8 @@ def _base_accelerations(trace: Trace):
         yield Finding("base acceleration", "a jump of the base", math.inf,
                       limits.accel_m_s2, "m/s^2", float(t[k + 1]), int(k) + 3)
     a, _ = _from_rest_to_rest(v, dt)
+    if trace.cut_short:  # (not at rest after its last state: it was cut there)
+        a = a[:-1]
     xy, yaw = np.hypot(a[:, 0], a[:, 1]), np.abs(a[:, 2])
     for values, limit, what, unit in ((xy, limits.accel_m_s2, "driving", "m/s^2"),
                                       (yaw, limits.turn_accel_rad_s2, "turning", "rad/s^2")):
@@ -294,20 +333,17 @@ def _from_rest_to_rest(v: np.ndarray, dt: np.ndarray) -> tuple[np.ndarray, np.nd
 ROUNDING_M = 2e-6
 
 
-def _joint_accelerations(trace: Trace):
-    """Each joint's acceleration between consecutive steps (a step of no time that moves
-    a joint is a jump; one that moves nothing is the same state written twice), from rest
-    before the first state and to rest after the last."""
-    from cramlite.motion.trajectory import ACCELERATION_TIME_S
+def _joint_columns(trace: Trace) -> tuple[list[int], list[float], list[tuple[str, str]],
+                                          list[bool]]:
+    """The joints whose motion is checked (not a mimic follower: it follows its leader):
+    their columns of `q`, velocity limits (the URDF's, or the header's where tighter),
+    (name, unit) and whether each turns without end."""
     from cramlite.scene.models import pr2_model
 
-    states = trace.states
-    if len(states) < 2:
-        return
     model = pr2_model()
     followers = {m.joint for m in model.mimics}
     claimed = (trace.header.get("robot") or {}).get("joint_limits") or {}
-    columns, limits, names, turning = [], [], [], []
+    columns, velocities, names, turning = [], [], [], []
     for i, name in enumerate(trace.header["joints"]):
         joint = model.joints.get(name)
         if joint is None or name in followers or not joint.velocity > 0:
@@ -319,15 +355,36 @@ def _joint_accelerations(trace: Trace):
             velocity = float(given[2])
         turning.append(joint.kind == "continuous")
         columns.append(i)
-        limits.append(velocity / ACCELERATION_TIME_S)
-        names.append((name, "m/s^2" if joint.kind == "prismatic" else "rad/s^2"))
-    if not columns:
-        return
-    t = np.array([s["t"] for s in states], dtype=float)
-    q = np.array([s["q"] for s in states], dtype=float)[:, columns]
+        velocities.append(velocity)
+        names.append((name, "m" if joint.kind == "prismatic" else "rad"))
+    return columns, velocities, names, turning
+
+
+def _joint_steps(trace: Trace, columns: list[int], turning: list[bool],
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The states' times, and each step's length and joints' change."""
+    t = np.array([s["t"] for s in trace.states], dtype=float)
+    q = np.array([s["q"] for s in trace.states], dtype=float)[:, columns]
     # (a continuous joint's angle may be written a turn apart: the same angle)
     q[:, turning] = np.unwrap(q[:, turning], axis=0)
-    dt, dq = np.diff(t), np.diff(q, axis=0)
+    return t, np.diff(t), np.diff(q, axis=0)
+
+
+def _joint_accelerations(trace: Trace):
+    """Each joint's acceleration between consecutive steps (a step of no time that moves
+    a joint is a jump; one that moves nothing is the same state written twice), from rest
+    before the first state and to rest after the last."""
+    from cramlite.motion.trajectory import ACCELERATION_TIME_S
+
+    states = trace.states
+    if len(states) < 2:
+        return
+    columns, velocities, names, turning = _joint_columns(trace)
+    if not columns:
+        return
+    limits = [velocity / ACCELERATION_TIME_S for velocity in velocities]
+    names = [(name, f"{unit}/s^2") for name, unit in names]
+    t, dt, dq = _joint_steps(trace, columns, turning)
     still = dt <= 1e-9
     for k in np.flatnonzero(still & np.any(np.abs(dq) > ROUNDING_M, axis=1)):
         j = int(np.argmax(np.abs(dq[k])))
@@ -343,11 +400,131 @@ def _joint_accelerations(trace: Trace):
     shorter = np.minimum(lengths[:-1], lengths[1:])
     shorter = np.where(shorter > 0, shorter, np.maximum(lengths[:-1], lengths[1:]))
     allowed = np.array(limits) * (1 + ACCEL_TOLERANCE) + (ROUNDING_M / (shorter * gap))[:, None]
+    if trace.cut_short:  # (not at rest after its last state: it was cut there)
+        a, allowed = a[:-1], allowed[:-1]
     for k, j in zip(*np.nonzero(a > allowed), strict=True):
         # (between step k-1 and step k: at the state step k-1 ends at)
         state = int(steps[k - 1]) + 1 if k > 0 else int(steps[0])
         yield Finding("joint acceleration", names[j][0], round(float(a[k, j]), 2),
                       round(limits[j], 3), names[j][1], float(t[state]), state + 2)
+
+
+def _speeds(trace: Trace):
+    """The base's speed and turning rate and each joint's velocity over each step of time
+    (a step's average: a timed profile within its limits never exceeds them on average),
+    within their limits (`ACCEL_TOLERANCE`, and the rounding over the step)."""
+    states = trace.states
+    if len(states) < 2:
+        return
+    t = np.array([s["t"] for s in states], dtype=float)
+    dt = np.diff(t)
+    steps = np.flatnonzero(dt > 1e-9)  # (a step of no time is judged as a jump)
+    if not len(steps):
+        return
+    limits, _ = _base_limits(trace)
+    base = np.array([s["base"] for s in states], dtype=float)
+    base[:, 2] = np.unwrap(base[:, 2])
+    step = np.diff(base, axis=0)[steps]
+    span = dt[steps]
+    slack = ROUNDING_M / span
+    for values, limit, what, unit in (
+            (np.hypot(step[:, 0], step[:, 1]) / span, limits.speed_m_s, "driving", "m/s"),
+            (np.abs(step[:, 2]) / span, limits.turn_rad_s, "turning", "rad/s")):
+        for k in np.flatnonzero(values > limit * (1 + ACCEL_TOLERANCE) + slack):
+            yield Finding("base speed", what, round(float(values[k]), 3), round(limit, 3),
+                          unit, float(t[steps[k] + 1]), int(steps[k]) + 3)
+    columns, velocities, names, turning = _joint_columns(trace)
+    if not columns:
+        return
+    _, _, dq = _joint_steps(trace, columns, turning)
+    v = np.abs(dq[steps]) / span[:, None]
+    allowed = np.array(velocities) * (1 + ACCEL_TOLERANCE) + slack[:, None]
+    for k, j in zip(*np.nonzero(v > allowed), strict=True):
+        yield Finding("joint speed", names[j][0], round(float(v[k, j]), 3),
+                      round(velocities[j], 3), f"{names[j][1]}/s", float(t[steps[k] + 1]),
+                      int(steps[k]) + 3)
+
+
+def _holds(trace: Trace, checker: TraceChecker):
+    """Each held item within reach of its gripper's fingers (its bounds within
+    `ATTACH_REACH_M` of the tool frame), and no heavier than a hand may hold."""
+    bounds: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    last: dict[str, tuple] = {}
+    for i, state in enumerate(trace.states):
+        robot = None
+        for name, arm in state["held"].items():
+            model = checker.items.get(name)
+            if model is None or name not in state["objects"]:
+                continue
+            if model.mass_kg > HAND_PAYLOAD_KG:
+                yield Finding("payload", f"{name} held by the {arm} hand",
+                              round(model.mass_kg, 3), HAND_PAYLOAD_KG, "kg", state["t"],
+                              i + 2)
+            key = (arm, tuple(state["q"]), tuple(state["base"]),
+                   tuple(state["objects"][name]))
+            if last.get(name) == key:
+                continue
+            last[name] = key
+            if name not in bounds:
+                corners = np.vstack([shape_corners(shape, shape.in_link)
+                                     for shape in model.shapes])
+                bounds[name] = corners.min(axis=0), corners.max(axis=0)
+            if robot is None:
+                robot = checker.robot_frames(state)
+            tool = robot[f"{arm[0]}_gripper_tool_frame"][:3, 3]
+            frame = object_frame(state["objects"][name])
+            local = frame[:3, :3].T @ (tool - frame[:3, 3])
+            lo, hi = bounds[name]
+            gap = float(np.linalg.norm(np.maximum(0.0, np.maximum(lo - local, local - hi))))
+            if gap > ATTACH_REACH_M + 1e-3:
+                yield Finding("hold", f"{name} held by the {arm} hand, its bounds away from "
+                              "the fingers", round(gap * 100, 1), ATTACH_REACH_M * 100, "cm",
+                              state["t"], i + 2)
+
+
+def _unheld(trace: Trace, checker: TraceChecker):
+    """An item no hand holds (before or after a step) moves only with the drawer or door
+    it stands in (measured in that container's inside frame), or falls: it may shift
+    `UNHELD_SHIFT_M`, sideways more only as far as it dropped."""
+    states = trace.states
+    kitchen = [None] * len(states)
+
+    def frames(k: int) -> dict[str, np.ndarray]:
+        if kitchen[k] is None:
+            kitchen[k] = checker.kitchen_frames(states[k])
+        return kitchen[k]
+
+    for k in range(len(states) - 1):
+        before, after = states[k], states[k + 1]
+        for name, pose in after["objects"].items():
+            if name in before["held"] or name in after["held"] or name not in before["objects"]:
+                continue
+            a, b = np.array(before["objects"][name][:3]), np.array(pose[:3])
+            if np.max(np.abs(b - a)) <= UNHELD_SHIFT_M:
+                continue
+            if before["w"] != after["w"]:  # (it may ride in a drawer, or stand in the
+                for container in checker.containers.values():  # cupboard): its frame
+                    inside_a = np.linalg.solve(frames(k)[container.inside_link], [*a, 1.0])
+                    if _in_box(inside_a[:3], container):
+                        inside_b = np.linalg.solve(frames(k + 1)[container.inside_link],
+                                                   [*b, 1.0])
+                        a, b = inside_a[:3], inside_b[:3]
+                        break
+            drop = max(0.0, float(a[2] - b[2]))
+            sideways = float(np.hypot(*(b - a)[:2]))
+            rise = float(b[2] - a[2])
+            shift = max(sideways - drop, rise)
+            if shift > UNHELD_SHIFT_M:
+                yield Finding("unheld", f"{name} moved with no hand holding it",
+                              round(shift * 100, 1), UNHELD_SHIFT_M * 100, "cm", after["t"],
+                              k + 3)
+
+
+def _in_box(local: np.ndarray, container, margin: float = 0.02) -> bool:
+    """Is a point (in a container's inside frame) inside it, or within `margin`?"""
+    (x0, y0, z0), (x1, y1, z1) = container.inside_min, container.inside_max
+    return bool(x0 - margin <= local[0] <= x1 + margin and y0 - margin <= local[1] <= y1 + margin
+                and z0 - margin <= local[2] <= z1)
 
 
 def _supports(trace: Trace, checker: TraceChecker):
