@@ -359,3 +359,24 @@ def test_an_item_without_collision_geometry_is_named_once(tmp_path: Path,
     done = run_cli("show", str(path))
     _assert_user_error(done, str(path), "the item has no collision geometry")
     assert done.stderr.count("odd.urdf") == 1, done.stderr
+
+
+def test_a_world_without_a_containers_file_names_the_file_looked_for(tmp_path: Path) -> None:
+    """(It said "expected one of none (this world has none)": which file was missing?)"""
+    import shutil
+
+    shutil.copy(ROOT / "worlds" / "kitchen.urdf", tmp_path / "kitchen.urdf")
+    c1 = (ROOT / "worlds" / "setups" / "c1.yaml").read_text()
+    assert "world: kitchen\n" in c1
+    path = _write(tmp_path, c1.replace("world: kitchen\n", "world: kitchen.urdf\n", 1))
+    _assert_user_error(run_cli("show", str(path)), str(path), "items[0].in",
+                       "unknown container 'drawer_1'",
+                       f"no {tmp_path / 'kitchen.containers.yaml'} beside its URDF")
+    # a file that lists other containers is named too
+    (tmp_path / "kitchen.containers.yaml").write_text(
+        (ROOT / "worlds" / "kitchen.containers.yaml").read_text())
+    oven = _write(tmp_path, c1.replace("world: kitchen\n", "world: kitchen.urdf\n", 1)
+                  .replace("in: drawer_1\n", "in: oven\n", 1))
+    _assert_user_error(run_cli("show", str(oven)), "items[0].in", "unknown container 'oven'",
+                       "drawer_1, drawer_2, cupboard",
+                       f"(from {tmp_path / 'kitchen.containers.yaml'})")

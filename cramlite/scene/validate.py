@@ -18,7 +18,7 @@ from cramlite.scene.collision import SceneCollisions
 from cramlite.scene.models import Shape
 from cramlite.scene.scene import FLOOR_LINK, PlanningScene, shape_corners
 from cramlite.scene.transforms import pose_matrix, yaw_quat
-from cramlite.world.containers import turned_halves
+from cramlite.world.containers import containers_path, turned_halves
 from cramlite.world.pr2 import PARK_JOINTS
 from cramlite.world.setup import ItemSpec, Setup
 
@@ -182,8 +182,14 @@ def _check_in_container(scene: PlanningScene, spec: ItemSpec, src: str, where: s
     """An item `in:` a container names one of the world's and fits inside it."""
     container = scene.containers.get(spec.container)
     if container is None:
-        raise SetupError(f"unknown container {spec.container!r}; expected one of "
-                         f"{', '.join(scene.containers) or 'none (this world has none)'}",
+        path = containers_path(scene.setup.world_urdf)
+        if scene.containers:
+            known = f"one of {', '.join(scene.containers)} (from {path})"
+        elif path.exists():
+            known = f"none ({path} lists none)"
+        else:
+            known = f"none (this world has none: there is no {path} beside its URDF)"
+        raise SetupError(f"unknown container {spec.container!r}; expected {known}",
                          source=src, field=f"{where}.in")
     local = scene._inside_local(container, spec.pose.xyz, {container.joint: 0.0})
     ex, ey, ez = scene.items[spec.name].extents
