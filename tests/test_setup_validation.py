@@ -380,3 +380,26 @@ def test_a_world_without_a_containers_file_names_the_file_looked_for(tmp_path: P
     _assert_user_error(run_cli("show", str(oven)), "items[0].in", "unknown container 'oven'",
                        "drawer_1, drawer_2, cupboard",
                        f"(from {tmp_path / 'kitchen.containers.yaml'})")
+
+
+@pytest.mark.parametrize(("item", "target", "fragments"), [
+    # 20 cm tall, the drawer 18 cm inside (the run failed later, at the drawer)
+    ("milk", "[1.4, -0.7, 0.6, 0.0]", ("items[2].target", "the target of 'milk'",
+                                       "does not fit in 'drawer_1'", "at most 0.18 m tall")),
+    # through the drawer's back: its bounds 2 cm beyond the inside
+    ("cup", "[1.56, -0.7, 0.6, 0.0]", ("items[3].target", "the target of 'cup'",
+                                       "does not fit in 'drawer_1'", "inside 0.30 x 0.33 m")),
+    ("cup", "[1.4, -0.7, 0.6, 0.0]", ()),  # (in the middle of the drawer: it fits)
+])
+def test_a_target_in_a_container_is_refused_where_the_item_does_not_fit(
+        tmp_path: Path, setup_text: str, item: str, target: str,
+        fragments: tuple[str, ...]) -> None:
+    """The same check as an item `in:` a container at the start."""
+    old = {"milk": "target: [-0.85, 1.6, 0.86, 0.0]", "cup": CUP_TARGET}[item]
+    assert setup_text.count(old) == 1
+    path = _write(tmp_path, setup_text.replace(old, f"target: {target}"))
+    done = run_cli("show", str(path), "--out", str(tmp_path / "x.png"))
+    if fragments:
+        _assert_user_error(done, str(path), *fragments)
+    else:
+        assert done.returncode == 0, done.stderr

@@ -18,7 +18,7 @@ from cramlite.scene.collision import SceneCollisions
 from cramlite.scene.models import Shape
 from cramlite.scene.scene import FLOOR_LINK, PlanningScene, shape_corners
 from cramlite.scene.transforms import pose_matrix, yaw_quat
-from cramlite.world.containers import containers_path, turned_halves
+from cramlite.world.containers import Container, containers_path, turned_halves
 from cramlite.world.pr2 import PARK_JOINTS
 from cramlite.world.setup import ItemSpec, Setup
 
@@ -50,6 +50,9 @@ def check_setup(scene: PlanningScene) -> None:
                        f"surface (in the air, off the edge or below the floor); expected "
                        f"z = the top of a surface under it (one of {', '.join(surfaces)}) "
                        "or the bottom of a drawer or cupboard it is in")
+        inside, _ = scene.container_at(target.xyz)
+        if inside is not None:  # (a target in a drawer or the cupboard: the item fits)
+            _check_fits(scene, spec, target, inside, src, f"{where}.target")
         if spec.container is not None:
             _check_in_container(scene, spec, src, where)
             continue
@@ -191,19 +194,27 @@ def _check_in_container(scene: PlanningScene, spec: ItemSpec, src: str, where: s
             known = f"none (this world has none: there is no {path} beside its URDF)"
         raise SetupError(f"unknown container {spec.container!r}; expected {known}",
                          source=src, field=f"{where}.in")
-    local = scene._inside_local(container, spec.pose.xyz, {container.joint: 0.0})
+    _check_fits(scene, spec, spec.pose, container, src, f"{where}.pose")
+
+
+def _check_fits(scene: PlanningScene, spec: ItemSpec, pose, container: Container, src: str,
+                fld: str) -> None:
+    """The item at `pose` (its start `in:` a container, or its target inside one, given as
+    it is with the container closed) stands on the inside's bottom, its bounds turned to
+    its yaw within the inside's walls, and is no taller than the inside."""
+    local = scene._inside_local(container, pose.xyz, {container.joint: 0.0})
     ex, ey, ez = scene.items[spec.name].extents
-    half_x, half_y = turned_halves((ex, ey), spec.pose.yaw - scene.inside_yaw(container))
+    half_x, half_y = turned_halves((ex, ey), pose.yaw - scene.inside_yaw(container))
     if not container.fits(tuple(local), half_x, half_y, ez):
         (x0, y0, z0), (x1, y1, z1) = container.inside_min, container.inside_max
         frame = scene.kitchen_frames({container.joint: 0.0})[container.inside_link]
         bottom = float((frame @ np.array([0.0, 0.0, z0, 1.0]))[2])
+        what = f"item {spec.name!r}" if fld.endswith(".pose") else f"the target of {spec.name!r}"
         raise SetupError(
-            f"item {spec.name!r} ({ex:.2f} x {ey:.2f} x {ez:.2f} m) at "
-            f"{list(spec.pose.xyz)} does not fit in {container.name!r}; expected it "
-            f"standing on its bottom (z = {bottom:.2f}), inside {x1 - x0:.2f} x "
-            f"{y1 - y0:.2f} m and at most {z1 - z0:.2f} m tall",
-            source=src, field=f"{where}.pose")
+            f"{what} ({ex:.2f} x {ey:.2f} x {ez:.2f} m) at {list(pose.xyz)} does not fit in "
+            f"{container.name!r}; expected it standing on its bottom (z = {bottom:.2f}), "
+            f"inside {x1 - x0:.2f} x {y1 - y0:.2f} m and at most {z1 - z0:.2f} m tall",
+            source=src, field=fld)
 
 
 def _check_robot_start(scene: PlanningScene, collisions: SceneCollisions, fail) -> None:
