@@ -403,3 +403,60 @@ def test_a_target_in_a_container_is_refused_where_the_item_does_not_fit(
         _assert_user_error(done, str(path), *fragments)
     else:
         assert done.returncode == 0, done.stderr
+
+
+BOWL_POSE = "pose: [1.45, -0.65, 0.85, 0.0]"
+BOWL_TARGET = "target: [-0.85, 1.24, 0.86, 0.0]"
+
+
+@pytest.mark.parametrize(("old", "new", "fragments"), [
+    # its middle at the counter's front edge (x = 1.25: on PyBullet the bowl fell off)
+    (BOWL_POSE, "pose: [1.25, -0.65, 0.85, 0.0]",
+     ("items[4].pose", "item 'bowl'", "not on 'counter'", "0.000 m inside its edge",
+      "expected x in [1.27, 1.83], y in [-0.93, 1.33], z = 0.85")),
+    (BOWL_POSE, "pose: [1.26, -0.65, 0.85, 0.0]", ("items[4].pose", "0.010 m inside")),
+    # half of it over the island's near edge (x = -0.67), or 3 cm inside it: the robot
+    # may put it 3 cm from its target
+    (BOWL_TARGET, "target: [-0.67, 1.24, 0.86, 0.0]",
+     ("items[4].target", "target of 'bowl'", "at the edge of 'island'",
+      "expected x in [-1.42, -0.72], y in [0.54, 2.89]")),
+    (BOWL_TARGET, "target: [-0.7, 1.24, 0.86, 0.0]",
+     ("items[4].target", "at the edge of 'island'", "0.030 m inside its edge")),
+    # overhanging the edge with its centre well inside: it stands
+    (BOWL_POSE, "pose: [1.28, -0.65, 0.85, 0.0]", ()),
+    (BOWL_TARGET, "target: [-0.72, 1.24, 0.86, 0.0]", ()),
+])
+def test_an_item_stands_with_its_centre_of_mass_inside_its_surface(
+        tmp_path: Path, setup_text: str, old: str, new: str,
+        fragments: tuple[str, ...]) -> None:
+    assert setup_text.count(old) == 1
+    path = _write(tmp_path, setup_text.replace(old, new))
+    done = run_cli("show", str(path), "--out", str(tmp_path / "x.png"))
+    if fragments:
+        _assert_user_error(done, str(path), *fragments)
+    else:
+        assert done.returncode == 0, done.stderr
+
+
+def test_the_support_check_takes_the_centre_of_mass_and_the_yaw(tmp_path: Path,
+                                                                 setup_text: str) -> None:
+    """A carton whose mass is 3 cm to its +x side: at 2.5 cm from the counter's edge it
+    stands with that side inward, not turned the other way."""
+    import shutil
+
+    (tmp_path / "carton.urdf").write_text(
+        MILK.replace('<inertial><origin xyz="0 0 0.1000"/>',
+                     '<inertial><origin xyz="0.03 0 0.1000"/>'))
+    shutil.copy(ROOT_ITEMS / "milk.item.yaml", tmp_path / "carton.item.yaml")
+    milk_pose = "type: milk          # worlds/items/milk.urdf\n    pose: [1.45, -0.15, 0.85, 0.0]"
+    assert milk_pose in setup_text
+
+    def at(yaw: float):
+        text = setup_text.replace(milk_pose, "type: carton.urdf\n    pose: "
+                                             f"[1.275, -0.15, 0.85, {yaw}]")
+        return run_cli("show", str(_write(tmp_path, text)), "--out", str(tmp_path / "x.png"))
+
+    done = at(0.0)
+    assert done.returncode == 0, done.stderr
+    _assert_user_error(at(3.1416), "items[2].pose", "item 'milk'", "0.005 m beyond its edge",
+                       "expected x in [1.30, 1.86]")

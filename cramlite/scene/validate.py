@@ -1,14 +1,16 @@
 """Refusing a setup a trial could not start from, on the planning scene (any backend).
 
-Every item stands on its surface (or fits inside its container) and starts inside
-nothing else; every target rests on the top of a surface, free of the furniture and of
-the other targets; the robot (arms parked) stands on the kitchen floor, inside no
+Every item stands on its surface, its centre of mass inside the top's edges by a margin
+(or fits inside its container), and starts inside nothing else; every target rests on the
+top of a surface likewise (or fits inside the container it is in), free of the furniture
+and of the other targets; the robot (arms parked) stands on the kitchen floor, inside no
 furniture and no item. Each refusal is a `SetupError` naming the file, the field and what
 was expected.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 
 import numpy as np
@@ -16,7 +18,7 @@ import numpy as np
 from cramlite.errors import SetupError
 from cramlite.scene.collision import SceneCollisions
 from cramlite.scene.models import Shape
-from cramlite.scene.scene import FLOOR_LINK, PlanningScene, shape_corners
+from cramlite.scene.scene import FLOOR_LINK, PlanningScene, Surface, shape_corners
 from cramlite.scene.transforms import pose_matrix, yaw_quat
 from cramlite.world.containers import Container, containers_path, turned_halves
 from cramlite.world.pr2 import PARK_JOINTS
@@ -26,6 +28,11 @@ from cramlite.world.setup import ItemSpec, Setup
 PENETRATION_TOLERANCE_M = 0.005
 #: An item must start within this height of its surface's top.
 SURFACE_HEIGHT_TOLERANCE_M = 0.01
+#: An item's centre of mass stands at least this far inside the edges of the top it
+#: stands on (at its start and at its target): over an edge it tips off, right at one a
+#: nudge tips it (a bowl with its middle at the counter's front edge fell to the floor on
+#: PyBullet). Its footprint may overhang the edge (a spoon's handle).
+SUPPORT_MARGIN_M = 0.02
 
 Placed = list[tuple[Shape, np.ndarray]]
 
@@ -38,13 +45,20 @@ def check_setup(scene: PlanningScene) -> None:
     def fail(fld: str, message: str) -> SetupError:
         return SetupError(message, source=src, field=fld)
 
+    from cramlite.designators.locations import TARGET_RINGS_M  # (where it may be put)
+
     _check_graspable(scene, fail)
     collisions = SceneCollisions(scene)
     surfaces = scene.surfaces()
+    tops = [scene.surface(name) for name in scene.kitchen.shapes_by_link]  # (the floor too)
+    #: A target's centre of mass is inside its top's edges by this much more: the robot may
+    #: put the item that far from its target.
+    put_off = max(TARGET_RINGS_M)
     for i, spec in enumerate(setup.items):
         where = f"items[{i}]"
         target = spec.target  # (wherever the item starts: a target needs something under it)
-        if scene.support_under(target.xyz, SURFACE_HEIGHT_TOLERANCE_M) is None:
+        support = scene.support_under(target.xyz, SURFACE_HEIGHT_TOLERANCE_M)
+        if support is None:
             raise fail(f"{where}.target",
                        f"target of {spec.name!r} at {list(target.xyz)} rests on no "
                        f"surface (in the air, off the edge or below the floor); expected "
@@ -53,6 +67,17 @@ def check_setup(scene: PlanningScene) -> None:
         inside, _ = scene.container_at(target.xyz)
         if inside is not None:  # (a target in a drawer or the cupboard: the item fits)
             _check_fits(scene, spec, target, inside, src, f"{where}.target")
+        elif support in scene.kitchen.shapes_by_link:  # (on a surface: it stands there)
+            surf = scene.surface(support)
+            margin = SUPPORT_MARGIN_M + put_off
+            if not _supported(scene, spec.name, target, tops, margin):
+                raise fail(f"{where}.target",
+                           f"target of {spec.name!r} at {list(target.xyz)} is at the edge of "
+                           f"{surf.name!r} ({_com_inside(scene, spec.name, target, surf)}); "
+                           f"expected {_allowed(scene, spec.name, target, surf, margin)} (its "
+                           f"centre of mass {SUPPORT_MARGIN_M:.2f} m inside the edges, so "
+                           f"that it cannot tip, and {put_off:.2f} m more: the robot may "
+                           f"put it that far from its target)")
         if spec.container is not None:
             _check_in_container(scene, spec, src, where)
             continue
@@ -60,13 +85,15 @@ def check_setup(scene: PlanningScene) -> None:
             raise fail(f"{where}.surface", f"unknown surface {spec.surface!r}; expected "
                                            f"one of {', '.join(surfaces)}")
         surf = scene.surface(spec.surface)
-        if (not surf.contains_xy(spec.pose.x, spec.pose.y)
-                or abs(spec.pose.z - surf.top_z) > SURFACE_HEIGHT_TOLERANCE_M):
+        on_top = abs(spec.pose.z - surf.top_z) <= SURFACE_HEIGHT_TOLERANCE_M
+        if not (on_top and _supported(scene, spec.name, spec.pose, tops, SUPPORT_MARGIN_M)):
+            why = f" ({_com_inside(scene, spec.name, spec.pose, surf)})" if on_top else ""
             raise fail(f"{where}.pose",
                        f"item {spec.name!r} at {list(spec.pose.xyz)} is not on "
-                       f"{spec.surface!r}; expected x in [{surf.x_min:.2f}, "
-                       f"{surf.x_max:.2f}], y in [{surf.y_min:.2f}, {surf.y_max:.2f}], "
-                       f"z = {surf.top_z:.2f}")
+                       f"{spec.surface!r}{why}; expected "
+                       f"{_allowed(scene, spec.name, spec.pose, surf, SUPPORT_MARGIN_M)}, "
+                       f"z = {surf.top_z:.2f} (its centre of mass {SUPPORT_MARGIN_M:.2f} m "
+                       "inside the edges, so that it cannot tip)")
     _check_robot_start(scene, collisions, fail)
     kitchen = [(s, p) for s, p in scene.kitchen_shapes() if s.link != FLOOR_LINK]
     robot = _robot_parked(scene)
@@ -133,6 +160,48 @@ def _nearest_standing(checker, x: float, y: float) -> float | None:
             if checker.is_free(float(bx), float(by), float(angle + np.pi)):
                 return float(radius)
     return None
+
+
+def _centre_of_mass_xy(scene: PlanningScene, name: str, pose) -> np.ndarray:
+    """Where an item's centre of mass is, seen from above, with the item at `pose`."""
+    cx, cy, _ = scene.items[name].model.centre_of_mass
+    c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+    return np.array([pose.x + c * cx - s * cy, pose.y + s * cx + c * cy])
+
+
+def _supported(scene: PlanningScene, name: str, pose, tops: list[Surface],
+               margin: float) -> bool:
+    """Is the item's centre of mass, with the item at `pose`, at least `margin` inside the
+    edges of the tops at its bottom's height (a square of that half size about it, its
+    corners and middles, on them: on two tops that meet, across their seam)?"""
+    com = _centre_of_mass_xy(scene, name, pose)
+    level = [t for t in tops if abs(pose.z - t.top_z) <= SURFACE_HEIGHT_TOLERANCE_M]
+    return all(any(t.contains_xy(float(x), float(y)) for t in level)
+               for x, y in com + (margin - 1e-9) * _SQUARE)  # (x = 1.27 is on)
+
+
+#: A square's corners, the middles of its sides and its centre, at half size 1.
+_SQUARE = np.array([(sx, sy) for sx in (-1, 0, 1) for sy in (-1, 0, 1)], dtype=float)
+
+
+def _com_inside(scene: PlanningScene, name: str, pose, surf: Surface) -> str:
+    """How far inside a top's edges the item's centre of mass is (for messages)."""
+    x, y = _centre_of_mass_xy(scene, name, pose)
+    inside = min(x - surf.x_min, surf.x_max - x, y - surf.y_min, surf.y_max - y)
+    if inside < 0:
+        return f"its centre of mass {-inside:.3f} m beyond its edge"
+    return f"its centre of mass {inside:.3f} m inside its edge"
+
+
+def _allowed(scene: PlanningScene, name: str, pose, surf: Surface, margin: float) -> str:
+    """The x and y an item at `pose` (its yaw) may be given on a top (for messages)."""
+    dx, dy = _centre_of_mass_xy(scene, name, pose) - (pose.x, pose.y)
+    x0, x1 = surf.x_min + margin - dx, surf.x_max - margin - dx
+    y0, y1 = surf.y_min + margin - dy, surf.y_max - margin - dy
+    if x0 > x1 or y0 > y1:
+        return (f"a top larger than {surf.name!r} ({surf.x_max - surf.x_min:.2f} x "
+                f"{surf.y_max - surf.y_min:.2f} m)")
+    return f"x in [{x0:.2f}, {x1:.2f}], y in [{y0:.2f}, {y1:.2f}]"
 
 
 def _item_at(scene: PlanningScene, name: str, pose) -> Placed:
