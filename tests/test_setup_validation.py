@@ -460,3 +460,36 @@ def test_the_support_check_takes_the_centre_of_mass_and_the_yaw(tmp_path: Path,
     assert done.returncode == 0, done.stderr
     _assert_user_error(at(3.1416), "items[2].pose", "item 'milk'", "0.005 m beyond its edge",
                        "expected x in [1.30, 1.86]")
+
+
+def test_the_robot_starts_free_with_its_arms_as_a_trial_begins(tmp_path: Path,
+                                                               setup_text: str) -> None:
+    """A trial begins with every joint at zero (the arms stretched out forward; the plan
+    parks them first): facing the counter from 0.3 m, the parked robot is free and the
+    fingertips are 1.8 cm inside the counter (what `replay --check` found at t = 0)."""
+    path = _write(tmp_path, setup_text.replace(START, "start: [0.3, 0.0, 0.0]"))
+    _assert_user_error(run_cli("show", str(path), "--out", str(tmp_path / "x.png")),
+                       str(path), "robot.start", "starts inside 'counter_body'",
+                       "overlap 1.8 cm: its l_gripper_l_finger_tip_link",
+                       "as a trial begins, stretched out")
+    back = _write(tmp_path, setup_text.replace(START, "start: [0.25, 0.0, 0.0]"))
+    done = run_cli("show", str(back), "--out", str(tmp_path / "x.png"))
+    assert done.returncode == 0, done.stderr
+
+
+def test_the_robot_start_check_takes_every_link_and_both_arm_poses() -> None:
+    """On the planning scene itself: the robot's shapes at its start are every link's,
+    parked and as a trial begins, and the grippers are where Pinocchio places them."""
+    from cramlite.scene.scene import PlanningScene
+    from cramlite.scene.validate import _robot_poses
+    from cramlite.world.setup import load_setup
+
+    scene = PlanningScene(load_setup("v1"))
+    poses = dict(_robot_poses(scene))
+    assert len(poses) == 2
+    for placed in poses.values():
+        assert {shape.link for shape, _ in placed} == set(scene.robot.shapes_by_link)
+    stretched = next(placed for how, placed in poses.items() if "stretched" in how)
+    tip = next(p for s, p in stretched if s.link == "l_gripper_l_finger_tip_link")
+    start = scene.setup.robot_start  # (facing +y: the arms reach along it)
+    assert tip[1, 3] - start.y > 0.8

@@ -3,9 +3,9 @@
 Every item stands on its surface, its centre of mass inside the top's edges by a margin
 (or fits inside its container), and starts inside nothing else; every target rests on the
 top of a surface likewise (or fits inside the container it is in), free of the furniture
-and of the other targets; the robot (arms parked) stands on the kitchen floor, inside no
-furniture and no item. Each refusal is a `SetupError` naming the file, the field and what
-was expected.
+and of the other targets; the robot stands on the kitchen floor, inside no furniture and no
+item, with its arms parked and as a trial begins (stretched out). Each refusal is a
+`SetupError` naming the file, the field and what was expected.
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ def check_setup(scene: PlanningScene) -> None:
                        "inside the edges, so that it cannot tip)")
     _check_robot_start(scene, collisions, fail)
     kitchen = [(s, p) for s, p in scene.kitchen_shapes() if s.link != FLOOR_LINK]
-    robot = _robot_parked(scene)
+    robot = [placed for _, shapes in _robot_poses(scene) for placed in shapes]
     starts = {spec.name: _item_at(scene, spec.name, spec.pose) for spec in setup.items}
     for i, spec in enumerate(setup.items):
         mine = starts[spec.name]
@@ -211,9 +211,16 @@ def _item_at(scene: PlanningScene, name: str, pose) -> Placed:
 
 def _deepest(collisions: SceneCollisions, a: Placed, b: Placed) -> float:
     """The deepest penetration between two sets of placed shapes (bounds first)."""
-    deepest = 0.0
+    return _deepest_pair(collisions, a, b)[0]
+
+
+def _deepest_pair(collisions: SceneCollisions, a: Placed, b: Placed,
+                  ) -> tuple[float, Shape | None]:
+    """The deepest penetration between two sets of placed shapes (bounds first), and the
+    shape of `a` it is of (None if none is inside another)."""
+    deepest, which = 0.0, None
     if not a or not b:
-        return deepest
+        return deepest, which
     # (each shape's corners, or a mesh's vertices, placed: their bounds)
     corners_a = [shape_corners(sa, pa) for sa, pa in a]
     corners_b = [shape_corners(sb, pb) for sb, pb in b]
@@ -224,18 +231,30 @@ def _deepest(collisions: SceneCollisions, a: Placed, b: Placed) -> float:
     apart = np.any((hi_a[:, None] < lo_b[None]) | (hi_b[None] < lo_a[:, None]), axis=2)
     for i, j in np.argwhere(~apart).tolist():
         (sa, pa), (sb, pb) = a[i], b[j]
-        deepest = max(deepest, collisions.depth(sa, pa, sb, pb))
-    return deepest
+        depth = collisions.depth(sa, pa, sb, pb)
+        if depth > deepest:
+            deepest, which = depth, sa
+    return deepest, which
 
 
-def _robot_parked(scene: PlanningScene) -> Placed:
-    """The robot's shapes at its start with the arms parked (the torso down)."""
+def _robot_poses(scene: PlanningScene) -> list[tuple[str, Placed]]:
+    """The robot's shapes (every link's: base, torso, head, arms, grippers) at its start,
+    as a plan has them there, each with what they are (for messages): with the arms
+    parked (the torso down), and as a trial begins, every joint at zero (the arms
+    stretched out forward, the grippers closed), from where a plan parks them first."""
     start = scene.setup.robot_start
-    parked = {k: v for arm in PARK_JOINTS.values() for k, v in arm.items()}
-    frames = scene.link_matrices(list(scene.robot.shapes_by_link), parked,
-                                 (start.x, start.y, start.yaw))
-    return [(shape, frames[link] @ shape.in_link)
-            for link, shapes in scene.robot.shapes_by_link.items() for shape in shapes]
+    base = (start.x, start.y, start.yaw)
+    initial = dict(scene.initial.joints)
+    parked = {**initial, **{k: v for arm in PARK_JOINTS.values() for k, v in arm.items()}}
+    out = []
+    for how, joints in (("its arms parked", parked),
+                        ("its arms as a trial begins, stretched out before it parks them",
+                         initial)):
+        frames = scene.link_matrices(list(scene.robot.shapes_by_link), joints, base)
+        out.append((how, [(shape, frames[link] @ shape.in_link)
+                          for link, shapes in scene.robot.shapes_by_link.items()
+                          for shape in shapes]))
+    return out
 
 
 def _check_graspable(scene: PlanningScene, fail) -> None:
@@ -287,9 +306,13 @@ def _check_fits(scene: PlanningScene, spec: ItemSpec, pose, container: Container
 
 
 def _check_robot_start(scene: PlanningScene, collisions: SceneCollisions, fail) -> None:
+    """The robot at its start with its arms parked is on the floor, and no link of it,
+    arms parked or as a trial begins (see `_robot_poses`), is inside the kitchen or an
+    item (coal's depth of each shape in each: `PENETRATION_TOLERANCE_M` allowed)."""
     start = scene.setup.robot_start
-    robot = _robot_parked(scene)
-    points = np.vstack([shape_corners(s, p) for s, p in robot])
+    poses = _robot_poses(scene)
+    # (on the floor: the parked robot; arms stretched out over its edge meet a wall, if any)
+    points = np.vstack([shape_corners(s, p) for s, p in poses[0][1]])
     lo, hi = points.min(axis=0), points.max(axis=0)
     if FLOOR_LINK in scene.kitchen.shapes_by_link:
         floor = scene.surface(FLOOR_LINK)
@@ -298,19 +321,24 @@ def _check_robot_start(scene: PlanningScene, collisions: SceneCollisions, fail) 
                        f"the robot at ({start.x:g}, {start.y:g}) is not on the floor of the "
                        f"kitchen; expected x in [{floor.x_min:.2f}, {floor.x_max:.2f}], y in "
                        f"[{floor.y_min:.2f}, {floor.y_max:.2f}] with room for the robot")
-    depths = {link: _deepest(collisions, robot, _link_shapes(scene, [link]))
-              for link in scene.kitchen.shapes_by_link if link != FLOOR_LINK}
-    link = max(depths, key=depths.get, default=None)
-    if link is not None and depths[link] > PENETRATION_TOLERANCE_M:
-        raise fail("robot.start",
-                   f"the robot at ({start.x:g}, {start.y:g}) starts inside {link!r} (overlap "
-                   f"{depths[link] * 100:.1f} cm); expected a free spot on the floor")
-    for i, spec in enumerate(scene.setup.items):
-        depth = _deepest(collisions, robot, _item_at(scene, spec.name, spec.pose))
-        if depth > PENETRATION_TOLERANCE_M:
+    for how, robot in poses:
+        found = {link: _deepest_pair(collisions, robot, _link_shapes(scene, [link]))
+                 for link in scene.kitchen.shapes_by_link if link != FLOOR_LINK}
+        link = max(found, key=lambda k: found[k][0], default=None)
+        if link is not None and found[link][0] > PENETRATION_TOLERANCE_M:
+            depth, shape = found[link]
             raise fail("robot.start",
-                       f"the robot at ({start.x:g}, {start.y:g}) starts inside item "
-                       f"{spec.name!r} (items[{i}]); expected a free spot")
+                       f"the robot at ({start.x:g}, {start.y:g}) starts inside {link!r} "
+                       f"(overlap {depth * 100:.1f} cm: its {shape.link}, with {how}); "
+                       "expected a free spot on the floor")
+        for i, spec in enumerate(scene.setup.items):
+            depth, shape = _deepest_pair(collisions, robot,
+                                         _item_at(scene, spec.name, spec.pose))
+            if depth > PENETRATION_TOLERANCE_M:
+                raise fail("robot.start",
+                           f"the robot at ({start.x:g}, {start.y:g}) starts inside item "
+                           f"{spec.name!r} (items[{i}]; overlap {depth * 100:.1f} cm: its "
+                           f"{shape.link}, with {how}); expected a free spot")
 
 
 def _link_shapes(scene: PlanningScene, links: Iterable[str]) -> Placed:
