@@ -384,10 +384,10 @@ def test_a_world_without_a_containers_file_names_the_file_looked_for(tmp_path: P
 
 @pytest.mark.parametrize(("item", "target", "fragments"), [
     # 20 cm tall, the drawer 18 cm inside (the run failed later, at the drawer)
-    ("milk", "[1.4, -0.7, 0.6, 0.0]", ("items[2].target", "the target of 'milk'",
+    ("milk", "[1.4, -0.7, 0.6, 0.0]", ("items[2].target", "target of 'milk'",
                                        "does not fit in 'drawer_1'", "at most 0.18 m tall")),
     # through the drawer's back: its bounds 2 cm beyond the inside
-    ("cup", "[1.56, -0.7, 0.6, 0.0]", ("items[3].target", "the target of 'cup'",
+    ("cup", "[1.56, -0.7, 0.6, 0.0]", ("items[3].target", "target of 'cup'",
                                        "does not fit in 'drawer_1'", "inside 0.30 x 0.33 m")),
     ("cup", "[1.4, -0.7, 0.6, 0.0]", ()),  # (in the middle of the drawer: it fits)
 ])

@@ -70,7 +70,7 @@ def check_setup(scene: PlanningScene) -> None:
         elif support in scene.kitchen.shapes_by_link:  # (on a surface: it stands there)
             surf = scene.surface(support)
             margin = SUPPORT_MARGIN_M + put_off
-            if not _supported(scene, spec.name, target, tops, margin):
+            if not _supported(scene, spec.name, target, surf, tops, margin):
                 raise fail(f"{where}.target",
                            f"target of {spec.name!r} at {list(target.xyz)} is at the edge of "
                            f"{surf.name!r} ({_com_inside(scene, spec.name, target, surf)}); "
@@ -86,7 +86,8 @@ def check_setup(scene: PlanningScene) -> None:
                                            f"one of {', '.join(surfaces)}")
         surf = scene.surface(spec.surface)
         on_top = abs(spec.pose.z - surf.top_z) <= SURFACE_HEIGHT_TOLERANCE_M
-        if not (on_top and _supported(scene, spec.name, spec.pose, tops, SUPPORT_MARGIN_M)):
+        if not (on_top and
+                _supported(scene, spec.name, spec.pose, surf, tops, SUPPORT_MARGIN_M)):
             why = f" ({_com_inside(scene, spec.name, spec.pose, surf)})" if on_top else ""
             raise fail(f"{where}.pose",
                        f"item {spec.name!r} at {list(spec.pose.xyz)} is not on "
@@ -169,15 +170,17 @@ def _centre_of_mass_xy(scene: PlanningScene, name: str, pose) -> np.ndarray:
     return np.array([pose.x + c * cx - s * cy, pose.y + s * cx + c * cy])
 
 
-def _supported(scene: PlanningScene, name: str, pose, tops: list[Surface],
+def _supported(scene: PlanningScene, name: str, pose, on: Surface, tops: list[Surface],
                margin: float) -> bool:
-    """Is the item's centre of mass, with the item at `pose`, at least `margin` inside the
-    edges of the tops at its bottom's height (a square of that half size about it, its
-    corners and middles, on them: on two tops that meet, across their seam)?"""
+    """Is the item's centre of mass, with the item at `pose`, over the top `on` and at
+    least `margin` inside the edges of the tops at its bottom's height (a square of that
+    half size about it, its corners and middles, on them: on two tops that meet, across
+    their seam)?"""
     com = _centre_of_mass_xy(scene, name, pose)
     level = [t for t in tops if abs(pose.z - t.top_z) <= SURFACE_HEIGHT_TOLERANCE_M]
-    return all(any(t.contains_xy(float(x), float(y)) for t in level)
-               for x, y in com + (margin - 1e-9) * _SQUARE)  # (x = 1.27 is on)
+    return on.contains_xy(*com) and all(
+        any(t.contains_xy(float(x), float(y)) for t in level)
+        for x, y in com + (margin - 1e-9) * _SQUARE)  # (x = 1.27 is on)
 
 
 #: A square's corners, the middles of its sides and its centre, at half size 1.
@@ -297,7 +300,7 @@ def _check_fits(scene: PlanningScene, spec: ItemSpec, pose, container: Container
         (x0, y0, z0), (x1, y1, z1) = container.inside_min, container.inside_max
         frame = scene.kitchen_frames({container.joint: 0.0})[container.inside_link]
         bottom = float((frame @ np.array([0.0, 0.0, z0, 1.0]))[2])
-        what = f"item {spec.name!r}" if fld.endswith(".pose") else f"the target of {spec.name!r}"
+        what = f"item {spec.name!r}" if fld.endswith(".pose") else f"target of {spec.name!r}"
         raise SetupError(
             f"{what} ({ex:.2f} x {ey:.2f} x {ez:.2f} m) at {list(pose.xyz)} does not fit in "
             f"{container.name!r}; expected it standing on its bottom (z = {bottom:.2f}), "
