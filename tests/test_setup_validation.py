@@ -359,3 +359,137 @@ def test_an_item_without_collision_geometry_is_named_once(tmp_path: Path,
     done = run_cli("show", str(path))
     _assert_user_error(done, str(path), "the item has no collision geometry")
     assert done.stderr.count("odd.urdf") == 1, done.stderr
+
+
+def test_a_world_without_a_containers_file_names_the_file_looked_for(tmp_path: Path) -> None:
+    """(It said "expected one of none (this world has none)": which file was missing?)"""
+    import shutil
+
+    shutil.copy(ROOT / "worlds" / "kitchen.urdf", tmp_path / "kitchen.urdf")
+    c1 = (ROOT / "worlds" / "setups" / "c1.yaml").read_text()
+    assert "world: kitchen\n" in c1
+    path = _write(tmp_path, c1.replace("world: kitchen\n", "world: kitchen.urdf\n", 1))
+    _assert_user_error(run_cli("show", str(path)), str(path), "items[0].in",
+                       "unknown container 'drawer_1'",
+                       f"no {tmp_path / 'kitchen.containers.yaml'} beside its URDF")
+    # a file that lists other containers is named too
+    (tmp_path / "kitchen.containers.yaml").write_text(
+        (ROOT / "worlds" / "kitchen.containers.yaml").read_text())
+    oven = _write(tmp_path, c1.replace("world: kitchen\n", "world: kitchen.urdf\n", 1)
+                  .replace("in: drawer_1\n", "in: oven\n", 1))
+    _assert_user_error(run_cli("show", str(oven)), "items[0].in", "unknown container 'oven'",
+                       "drawer_1, drawer_2, cupboard",
+                       f"(from {tmp_path / 'kitchen.containers.yaml'})")
+
+
+@pytest.mark.parametrize(("item", "target", "fragments"), [
+    # 20 cm tall, the drawer 18 cm inside (the run failed later, at the drawer)
+    ("milk", "[1.4, -0.7, 0.6, 0.0]", ("items[2].target", "target of 'milk'",
+                                       "does not fit in 'drawer_1'", "at most 0.18 m tall")),
+    # through the drawer's back: its bounds 2 cm beyond the inside
+    ("cup", "[1.56, -0.7, 0.6, 0.0]", ("items[3].target", "target of 'cup'",
+                                       "does not fit in 'drawer_1'", "inside 0.30 x 0.33 m")),
+    ("cup", "[1.4, -0.7, 0.6, 0.0]", ()),  # (in the middle of the drawer: it fits)
+])
+def test_a_target_in_a_container_is_refused_where_the_item_does_not_fit(
+        tmp_path: Path, setup_text: str, item: str, target: str,
+        fragments: tuple[str, ...]) -> None:
+    """The same check as an item `in:` a container at the start."""
+    old = {"milk": "target: [-0.85, 1.6, 0.86, 0.0]", "cup": CUP_TARGET}[item]
+    assert setup_text.count(old) == 1
+    path = _write(tmp_path, setup_text.replace(old, f"target: {target}"))
+    done = run_cli("show", str(path), "--out", str(tmp_path / "x.png"))
+    if fragments:
+        _assert_user_error(done, str(path), *fragments)
+    else:
+        assert done.returncode == 0, done.stderr
+
+
+BOWL_POSE = "pose: [1.45, -0.65, 0.85, 0.0]"
+BOWL_TARGET = "target: [-0.85, 1.24, 0.86, 0.0]"
+
+
+@pytest.mark.parametrize(("old", "new", "fragments"), [
+    # its middle at the counter's front edge (x = 1.25: on PyBullet the bowl fell off)
+    (BOWL_POSE, "pose: [1.25, -0.65, 0.85, 0.0]",
+     ("items[4].pose", "item 'bowl'", "not on 'counter'", "0.000 m inside its edge",
+      "expected x in [1.27, 1.83], y in [-0.93, 1.33], z = 0.85")),
+    (BOWL_POSE, "pose: [1.26, -0.65, 0.85, 0.0]", ("items[4].pose", "0.010 m inside")),
+    # half of it over the island's near edge (x = -0.67), or 3 cm inside it: the robot
+    # may put it 3 cm from its target
+    (BOWL_TARGET, "target: [-0.67, 1.24, 0.86, 0.0]",
+     ("items[4].target", "target of 'bowl'", "at the edge of 'island'",
+      "expected x in [-1.42, -0.72], y in [0.54, 2.89]")),
+    (BOWL_TARGET, "target: [-0.7, 1.24, 0.86, 0.0]",
+     ("items[4].target", "at the edge of 'island'", "0.030 m inside its edge")),
+    # overhanging the edge with its centre well inside: it stands
+    (BOWL_POSE, "pose: [1.28, -0.65, 0.85, 0.0]", ()),
+    (BOWL_TARGET, "target: [-0.72, 1.24, 0.86, 0.0]", ()),
+])
+def test_an_item_stands_with_its_centre_of_mass_inside_its_surface(
+        tmp_path: Path, setup_text: str, old: str, new: str,
+        fragments: tuple[str, ...]) -> None:
+    assert setup_text.count(old) == 1
+    path = _write(tmp_path, setup_text.replace(old, new))
+    done = run_cli("show", str(path), "--out", str(tmp_path / "x.png"))
+    if fragments:
+        _assert_user_error(done, str(path), *fragments)
+    else:
+        assert done.returncode == 0, done.stderr
+
+
+def test_the_support_check_takes_the_centre_of_mass_and_the_yaw(tmp_path: Path,
+                                                                 setup_text: str) -> None:
+    """A carton whose mass is 3 cm to its +x side: at 2.5 cm from the counter's edge it
+    stands with that side inward, not turned the other way."""
+    import shutil
+
+    (tmp_path / "carton.urdf").write_text(
+        MILK.replace('<inertial><origin xyz="0 0 0.1000"/>',
+                     '<inertial><origin xyz="0.03 0 0.1000"/>'))
+    shutil.copy(ROOT_ITEMS / "milk.item.yaml", tmp_path / "carton.item.yaml")
+    milk_pose = "type: milk          # worlds/items/milk.urdf\n    pose: [1.45, -0.15, 0.85, 0.0]"
+    assert milk_pose in setup_text
+
+    def at(yaw: float):
+        text = setup_text.replace(milk_pose, "type: carton.urdf\n    pose: "
+                                             f"[1.275, -0.15, 0.85, {yaw}]")
+        return run_cli("show", str(_write(tmp_path, text)), "--out", str(tmp_path / "x.png"))
+
+    done = at(0.0)
+    assert done.returncode == 0, done.stderr
+    _assert_user_error(at(3.1416), "items[2].pose", "item 'milk'", "0.005 m beyond its edge",
+                       "expected x in [1.30, 1.86]")
+
+
+def test_the_robot_starts_free_with_its_arms_as_a_trial_begins(tmp_path: Path,
+                                                               setup_text: str) -> None:
+    """A trial begins with every joint at zero (the arms stretched out forward; the plan
+    parks them first): facing the counter from 0.3 m, the parked robot is free and the
+    fingertips are 1.8 cm inside the counter (what `replay --check` found at t = 0)."""
+    path = _write(tmp_path, setup_text.replace(START, "start: [0.3, 0.0, 0.0]"))
+    _assert_user_error(run_cli("show", str(path), "--out", str(tmp_path / "x.png")),
+                       str(path), "robot.start", "starts inside 'counter_body'",
+                       "overlap 1.8 cm: its l_gripper_l_finger_tip_link",
+                       "as a trial begins, stretched out")
+    back = _write(tmp_path, setup_text.replace(START, "start: [0.25, 0.0, 0.0]"))
+    done = run_cli("show", str(back), "--out", str(tmp_path / "x.png"))
+    assert done.returncode == 0, done.stderr
+
+
+def test_the_robot_start_check_takes_every_link_and_both_arm_poses() -> None:
+    """On the planning scene itself: the robot's shapes at its start are every link's,
+    parked and as a trial begins, and the grippers are where Pinocchio places them."""
+    from cramlite.scene.scene import PlanningScene
+    from cramlite.scene.validate import _robot_poses
+    from cramlite.world.setup import load_setup
+
+    scene = PlanningScene(load_setup("v1"))
+    poses = dict(_robot_poses(scene))
+    assert len(poses) == 2
+    for placed in poses.values():
+        assert {shape.link for shape, _ in placed} == set(scene.robot.shapes_by_link)
+    stretched = next(placed for how, placed in poses.items() if "stretched" in how)
+    tip = next(p for s, p in stretched if s.link == "l_gripper_l_finger_tip_link")
+    start = scene.setup.robot_start  # (facing +y: the arms reach along it)
+    assert tip[1, 3] - start.y > 0.8

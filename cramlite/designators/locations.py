@@ -56,6 +56,9 @@ STANDOFFS_M = tuple(round(0.45 + 0.025 * i, 3) for i in range(15))  # 0.45 .. 0.
 IDEAL_STANDOFF_M = 0.60
 TRAVEL_WEIGHT = 0.25
 PICK, PLACE = "pick", "place"
+#: Where an item is put when its target is asked for: the target, else (taken, or out of
+#: reach) 8 spots on each of these circles around it.
+TARGET_RINGS_M = (0.015, 0.03)
 #: Grasp solutions tried per base pose when the approach or departure has none near it.
 IK_ATTEMPTS = 3
 #: Random restarts of a grasp's IK: a base pose that needs more is left for the next one.
@@ -508,7 +511,7 @@ class PlacingLocation:
     def spots(self, ctx: RobotContext) -> list[Vec3]:
         if self.target is not None:
             tx, ty, tz = self.target
-            rings = [(0.0, 1)] + [(r, 8) for r in (0.015, 0.03)]
+            rings = [(0.0, 1)] + [(r, 8) for r in TARGET_RINGS_M]
             return [(tx + r * math.cos(2 * math.pi * k / n), ty + r * math.sin(2 * math.pi * k / n),
                      tz) for r, n in rings for k in range(n)]
         surf = ctx.scene.surface(self.surface)

@@ -330,6 +330,10 @@ class ItemModel:
     yaw_symmetry_deg: float = 360.0
     #: Its mass (kg): the sum of its URDF links' masses.
     mass_kg: float = 0.0
+    #: Its centre of mass in its frame (its links' inertial origins weighted by their
+    #: masses; the middle of its bounds if it has no mass): what must be over what it
+    #: stands on.
+    centre_of_mass: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 @functools.cache
@@ -358,7 +362,22 @@ def _item_model(urdf: str, digest: str, type_: str) -> ItemModel:
         symmetry = _shape_symmetry(moved)
     mass = float(sum(inertia.mass for inertia in model.model.inertias))
     return ItemModel(type_, moved, tuple(float(v) for v in hi - lo), symmetry == 0.0,
-                     float(lo[2]), Path(urdf), kind, symmetry, mass)
+                     float(lo[2]), Path(urdf), kind, symmetry, mass,
+                     _centre_of_mass(model, (lo + hi) / 2))
+
+
+def _centre_of_mass(model: ArticulatedModel, middle: np.ndarray) -> tuple[float, float, float]:
+    """The centre of mass of a model's links (in its root frame, its joints at zero: as
+    its shapes are placed); `middle` if it has no mass."""
+    pm = model.model
+    data = pm.createData()
+    pin.forwardKinematics(pm, data, pin.neutral(pm))
+    total = sum(inertia.mass for inertia in pm.inertias)
+    if not total > 0:
+        return tuple(float(v) for v in middle)
+    moment = sum(inertia.mass * data.oMi[j].act(inertia.lever)
+                 for j, inertia in enumerate(pm.inertias))
+    return tuple(float(v) for v in moment / total)
 
 
 def _shape_symmetry(shapes: tuple[Shape, ...]) -> float:
