@@ -5,6 +5,8 @@ checked and the container's not). Kinematic backend."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from cramlite import (
@@ -19,6 +21,7 @@ from cramlite.designators.container_sweep import sweep_problem
 from cramlite.designators.failures import ContainerManipulationFailed
 from cramlite.trace import read_trace
 from cramlite.trace.check import penetrations
+from cramlite.trial import TrialRunner
 from cramlite.world.setup import load_setup
 
 
@@ -58,3 +61,14 @@ def test_the_cupboard_door_is_not_closed_through_an_item_at_its_edge() -> None:
         assert ctx.scene.world_joint_positions() == before and ctx.time_s == t
         # (clearing up c1-c3 closes drawers and the cupboard on what fits: the seed-0
         # traces are the same as before this check)
+
+
+def test_a_container_is_opened_only_from_where_the_arm_can_park_afterwards() -> None:
+    """(A red-team setup: "nearest" opened the cupboard door part of the way from a base
+    pose where the door then stood in the parked left hand's place; parking failed, and
+    so did every action after it, each parking first: 1 of 12 items delivered.)"""
+    setup = Path(__file__).parent / "data" / "setups" / "twelve_items.yaml"
+    with TrialRunner(str(setup), backend="kinematic") as runner:
+        result = runner.run("nearest", seed=1273096031)
+    assert result.success, result.failures
+    assert len(result.order) == 12

@@ -187,7 +187,7 @@ class AccessingLocation:
         self.start, self.end = start, end
         self.arms = list(arms)
         self.max_ik_checks = max_ik_checks
-        self.rejected = {"footprint": 0, "ik": 0, "arm collision": 0}
+        self.rejected = {"footprint": 0, "ik": 0, "arm collision": 0, "park": 0}
 
     def ground(self, ctx: RobotContext) -> Iterator[AccessPose]:
         path = handle_path(ctx, self.container, self.start, self.end)
@@ -240,6 +240,9 @@ class AccessingLocation:
         if not self._free(ctx, base, arm, names, states, values, pre, post):
             self.rejected["arm collision"] += 1
             return None
+        if not self._parks_after(ctx, base, arm, names, post):
+            self.rejected["park"] += 1
+            return None
         return AccessPose(base, arm, self.container.name, names, pre, states, values, arc,
                           post)
 
@@ -283,12 +286,25 @@ class AccessingLocation:
         opened.move_world_joint(container.joint, self.end)
         return opened.is_free(np.array([post[n] for n in names]))
 
+    def _parks_after(self, ctx: RobotContext, base: BasePose, arm: str,
+                     names: tuple[str, ...], post: dict[str, float]) -> bool:
+        """Can the arm be parked there afterwards (its park pose free, the gripper open,
+        the container where the stretch ends)? A door opened part of the way stood where
+        the parked left hand's fingers were, and every action after it, parking first,
+        failed."""
+        check = ctx.collisions.check(names, ignore=(self.container.handle,), base=base,
+                                     fixed=gripper_joints(arm, "open"))
+        check.move_world_joint(self.container.joint, self.end)
+        parked = {**post, **PARK_JOINTS[arm]}
+        return check.is_free(np.array([parked[n] for n in names]))
+
     def describe_rejections(self) -> str:
         total = sum(self.rejected.values())
         if not total:
             return ""
         why = {"footprint": "base in the way of the opening", "ik": "handle out of reach",
-               "arm collision": "arm would hit something"}
+               "arm collision": "arm would hit something",
+               "park": "arm could not park there afterwards"}
         return (f"{total} base poses ({'/'.join(self.arms)} arm): " +
                 ", ".join(f"{n} {why[k]}" for k, n in self.rejected.items() if n))
 
