@@ -172,3 +172,12 @@ def test_bench_carries_one_and_two_and_says_what_two_hands_save(tmp_path: Path) 
     again = run_cli(*args)  # (carry is part of the key: nothing left to run)
     assert again.returncode == 0 and "(4 already in" in again.stderr, again.stderr
     assert len(list(csv.DictReader((out / "trials.csv").open()))) == 4
+
+
+def test_optimal_batch_with_one_hand_is_optimal_not_the_opm() -> None:
+    """(A red-team user compared `optimal-batch` at --carry 1 against the OPM on v3 and got
+    the OPM's own order: one item a trip was the OPM's greedy choice.)"""
+    with TrialRunner("v3", backend="kinematic") as runner:
+        orders = {name: runner.run(name, seed=0).order
+                  for name in ("opm", "optimal", "optimal-batch")}
+    assert orders["optimal-batch"] == orders["optimal"] != orders["opm"], orders
