@@ -60,7 +60,7 @@ def check_setup(scene: PlanningScene) -> None:
         support = scene.support_under(target.xyz, SURFACE_HEIGHT_TOLERANCE_M)
         if support is None:
             raise fail(f"{where}.target",
-                       f"target of {spec.name!r} at {list(target.xyz)} rests on no "
+                       f"target of {spec.name!r} at {_xyz(target.xyz)} rests on no "
                        f"surface (in the air, off the edge or below the floor); expected "
                        f"z = the top of a surface under it (one of {', '.join(surfaces)}) "
                        "or the bottom of a drawer or cupboard it is in")
@@ -72,7 +72,7 @@ def check_setup(scene: PlanningScene) -> None:
             margin = SUPPORT_MARGIN_M + put_off
             if not _supported(scene, spec.name, target, surf, tops, margin):
                 raise fail(f"{where}.target",
-                           f"target of {spec.name!r} at {list(target.xyz)} is at the edge of "
+                           f"target of {spec.name!r} at {_xyz(target.xyz)} is at the edge of "
                            f"{surf.name!r} ({_com_inside(scene, spec.name, target, surf)}); "
                            f"expected {_allowed(scene, spec.name, target, surf, margin)} (its "
                            f"centre of mass {SUPPORT_MARGIN_M:.2f} m inside the edges, so "
@@ -90,7 +90,7 @@ def check_setup(scene: PlanningScene) -> None:
                 _supported(scene, spec.name, spec.pose, surf, tops, SUPPORT_MARGIN_M)):
             why = f" ({_com_inside(scene, spec.name, spec.pose, surf)})" if on_top else ""
             raise fail(f"{where}.pose",
-                       f"item {spec.name!r} at {list(spec.pose.xyz)} is not on "
+                       f"item {spec.name!r} at {_xyz(spec.pose.xyz)} is not on "
                        f"{spec.surface!r}{why}; expected "
                        f"{_allowed(scene, spec.name, spec.pose, surf, SUPPORT_MARGIN_M)}, "
                        f"z = {surf.top_z:.2f} (its centre of mass {SUPPORT_MARGIN_M:.2f} m "
@@ -207,6 +207,11 @@ def _allowed(scene: PlanningScene, name: str, pose, surf: Surface, margin: float
     return f"x in [{x0:.2f}, {x1:.2f}], y in [{y0:.2f}, {y1:.2f}]"
 
 
+def _xyz(values: Iterable[float]) -> str:
+    """A position as messages give it: [-0.8, 2.28, 0.86], not 2.2800000000000002."""
+    return repr([round(float(v), 6) for v in values])
+
+
 def _item_at(scene: PlanningScene, name: str, pose) -> Placed:
     frame = pose_matrix(pose.xyz, yaw_quat(pose.yaw))
     return scene.item_shapes(name, frame)
@@ -302,7 +307,7 @@ def _check_fits(scene: PlanningScene, spec: ItemSpec, pose, container: Container
         bottom = float((frame @ np.array([0.0, 0.0, z0, 1.0]))[2])
         what = f"item {spec.name!r}" if fld.endswith(".pose") else f"target of {spec.name!r}"
         raise SetupError(
-            f"{what} ({ex:.2f} x {ey:.2f} x {ez:.2f} m) at {list(pose.xyz)} does not fit in "
+            f"{what} ({ex:.2f} x {ey:.2f} x {ez:.2f} m) at {_xyz(pose.xyz)} does not fit in "
             f"{container.name!r}; expected it standing on its bottom (z = {bottom:.2f}), "
             f"inside {x1 - x0:.2f} x {y1 - y0:.2f} m and at most {z1 - z0:.2f} m tall",
             source=src, field=fld)
@@ -360,7 +365,7 @@ def _check_targets(scene: PlanningScene, collisions: SceneCollisions, kitchen: P
         depth = _deepest(collisions, mine, kitchen)
         if depth > PENETRATION_TOLERANCE_M:
             raise fail(f"items[{i}].target",
-                       f"target of {spec.name!r} at {list(spec.target.xyz)} is inside the "
+                       f"target of {spec.name!r} at {_xyz(spec.target.xyz)} is inside the "
                        f"furniture (overlap {depth * 100:.1f} cm); expected a free spot on a "
                        "surface")
         for j, other in enumerate(setup.items[:i]):
