@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from cramlite.errors import UserInputError
-from cramlite.plugins import file_hash, is_code_reference, load_reference
+from cramlite.plugins import file_hash, is_code_reference, load_reference, user_code
 
 ENTRY_POINT_GROUP = "cramlite.plans"
 BUILTIN_PLANS = ("set-table", "clear-table")
@@ -74,6 +74,7 @@ def available_plans() -> dict[str, str]:
     out = {name: summary_of(plan) for name, plan in _builtins().items()}
     for name, ep in plugin_entry_points().items():
         try:
+            user_code()
             out.setdefault(name, f"{summary_of(ep.load())} (plugin {ep.value})")
         except Exception as exc:  # a broken plugin is listed, with why
             out.setdefault(name, f"plugin {ep.value}: cannot load: {type(exc).__name__}: "
@@ -89,6 +90,7 @@ def plan_function(name: str, field: str = "--plan") -> Plan:
     plugins = plugin_entry_points()
     if name in plugins:
         try:
+            user_code()
             plan = plugins[name].load()
         except Exception as exc:
             raise UserInputError(f"cannot load plan {name!r} ({plugins[name].value}): "

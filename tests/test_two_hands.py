@@ -181,3 +181,12 @@ def test_optimal_batch_with_one_hand_is_optimal_not_the_opm() -> None:
         orders = {name: runner.run(name, seed=0).order
                   for name in ("opm", "optimal", "optimal-batch")}
     assert orders["optimal-batch"] == orders["optimal"] != orders["opm"], orders
+
+
+def test_optimal_batch_names_itself_when_a_task_is_too_large() -> None:
+    from cramlite.strategies import StrategyError
+
+    many = [Candidate(f"i{n}", (float(n), 0.0, 0.0), then_at=(float(n), 1.0, 0.0))
+            for n in range(16)]
+    with pytest.raises(StrategyError, match="optimal-batch plans exactly for at most 15"):
+        make_strategy("optimal-batch").choose(many, ROBOT)

@@ -29,6 +29,7 @@ from cramlite.backends.base import (
     StateObserver,
 )
 from cramlite.errors import UserInputError
+from cramlite.plugins import user_code
 from cramlite.world.setup import Setup
 
 ENTRY_POINT_GROUP = "cramlite.backends"
@@ -86,6 +87,7 @@ def backend_class(name: str) -> type[Backend]:
         raise UserInputError(f"unknown backend {name!r}; expected one of "
                              f"{', '.join(available_backends())}", field="--backend")
     try:
+        user_code()
         loaded = plugins[name].load()
     except Exception as exc:  # a broken plugin: one line, naming it
         raise UserInputError(f"backend {name!r} ({plugins[name].value}) could not be loaded: "

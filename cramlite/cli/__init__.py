@@ -118,20 +118,24 @@ def console() -> NoReturn:
     """The console script: `main`, then an exit that skips the interpreter's teardown.
 
     Freeing the modules of Pinocchio, coal, OMPL and PyBullet one object at a time takes
-    40-50 ms of a 0.8 s `cramlite run v1`, and cramlite needs none of it: it writes its
-    files through handles it closes itself. What a normal exit does that matters is kept:
+    40-50 ms of a 0.8 s `cramlite run v1`. What a normal exit does that matters is kept:
     the functions registered with `atexit` run (a plan's or a library's: logging flushes
-    its handlers, temporary folders are removed, a pool's workers are ended), and stdout
-    and stderr are flushed. Where a thread that is not a daemon is still running (it
-    would be waited for), or `main` raises, the exit is the normal one.
+    its handlers, temporary folders are removed, a pool's workers are ended; once a user's
+    plan, strategy or backend is loaded, every file still open is flushed: a plan's log it
+    never closed; cramlite closes its own), and stdout and stderr are flushed. Where a
+    thread that is not a daemon is still running (it would be waited for), or `main`
+    raises, the exit is the normal one.
     """
     code = main()
     code = 0 if code is None else code  # (as `sys.exit(None)` would)
     if not isinstance(code, int) or _others_running() or not hasattr(atexit,
                                                                        "_run_exitfuncs"):
         sys.exit(code)
-    atexit._run_exitfuncs()  # (what `sys.exit` would run before the teardown)
+    atexit._run_exitfuncs()  # (what `sys.exit` would run before the teardown; with a
+    # user's code loaded, this flushes the files it left open: `plugins.user_code`)
     for stream in (sys.stdout, sys.stderr):
+        if stream is None:  # (started with the stream closed: `cramlite ... >&-`)
+            continue
         try:
             stream.flush()
         except (OSError, ValueError):  # (a closed pipe: nothing more can reach it)

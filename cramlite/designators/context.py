@@ -590,7 +590,11 @@ def simulated_robot(setup: Setup | Backend | Any, seed: int | np.random.Generato
         ctx.observe()
         ended = False
         try:
-            yield ctx
+            try:
+                yield ctx
+            except PlanFailure:  # (a plan's failure: every state was written, as a trial's)
+                ended = True
+                raise
             ctx.flush_deferred()  # (a motion deferred to a drive that never came)
             ended = True
         finally:

@@ -73,7 +73,7 @@ class OptimalStrategy(OPMStrategy):
         if len(afters) == 1:  # every trip starts from one point (e.g. the table)
             return start - self.model.costs(afters.pop(), positions, kc[:, 0], kc[:, 1])
         if n > MAX_OPTIMAL_ITEMS:
-            raise StrategyError(f"optimal plans exactly for at most {MAX_OPTIMAL_ITEMS} items, "
+            raise StrategyError(f"{self.name} plans exactly for at most {MAX_OPTIMAL_ITEMS} items, "
                                 f"got {n}; use opm or opm-2step for larger tasks")
         step = np.vstack([self.model.costs(c.after_position(), positions, kc[:, 0], kc[:, 1])
                           for c in remaining])  # step[i, j]: after i, fetch j

@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import Any
 
 from cramlite.errors import UserInputError
-from cramlite.plugins import load_reference
+from cramlite.plugins import load_reference, user_code
 from cramlite.strategies.base import Strategy, StrategyError
 from cramlite.strategies.batch import (
     NearestBatchStrategy,
@@ -51,6 +51,7 @@ def available_strategies() -> dict[str, str]:
     out[f"{LEARNED_PREFIX}MODEL"] = "a model file written by `cramlite train` (RNN, NN, CPT)"
     for name, ep in plugin_entry_points().items():
         try:
+            user_code()
             cls = ep.load()
             summary = getattr(cls, "summary", "") or "(no summary)"
             out.setdefault(name, f"{summary} (plugin {ep.value})")
@@ -79,6 +80,7 @@ def strategy_class(name: str, *, registered_only: bool = False) -> type[Strategy
     plugins = plugin_entry_points()
     try:
         if name in plugins:
+            user_code()
             cls = plugins[name].load()
         elif ":" in name and not registered_only:
             # (a file path or a module, also from the current folder: see cramlite.plugins)

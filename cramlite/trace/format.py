@@ -246,6 +246,9 @@ def _check_header_2(record: dict[str, Any], fail) -> None:
                 for v in limits.values()):
             raise fail("header field robot: expected {\"urdf\": ..., \"joint_limits\": "
                        "{name: [lower, upper, velocity]}} (numbers, or null for none)")
+    if END_MARKED in record and not isinstance(record[END_MARKED], bool):
+        raise fail(f"header field {END_MARKED}: expected true or false, got "
+                   f"{json.dumps(record[END_MARKED])[:40]}")
     digest = record.get("setup_hash")
     if digest is not None and not (isinstance(digest, str) and 0 < len(digest) <= 64):
         raise fail("header field setup_hash: expected the setup's content hash (text)")

@@ -28,9 +28,10 @@ From the recorded states alone (no planner code):
 - hold: a held item's bounds within `ATTACH_REACH_M` of its gripper's tool frame (the
   hand holds what is between its fingers, not an item beside it or in the other hand's
   place), and no heavier than `HAND_PAYLOAD_KG`;
-- unheld: an item no hand holds moves only with the drawer or door it stands in, or
-  falls: between two states it may shift `UNHELD_SHIFT_M` (settling), sideways more only
-  as far as it dropped;
+- unheld: an item no hand holds stays where it was let go (or started), in the frame of
+  the drawer it stands in, or falls: it may shift `UNHELD_SHIFT_M` from there (settling),
+  sideways more only as far as twice what it dropped, never up; taken into a hand, it does
+  not jump into it;
 - impossible states: a joint beyond the URDF's limits (as the header states them), an
   object's quaternion that is not a rotation, a base nowhere near any kitchen;
 - cut short: a header that promises an end mark (`end_marked`) and no state marked
@@ -72,8 +73,9 @@ FINGERTIPS = ("gripper_l_finger_tip_link", "gripper_r_finger_tip_link")
 #: A gripper whose fingers are open this far or wider grips nothing (an open hand that
 #: brushes a handle on its way is a contact, judged by the penetration check).
 OPEN_FINGER_RAD = 0.54
-#: An item no hand holds may shift this much between two states (a physics engine's
-#: settling is under 0.3 mm), sideways more only as far as it dropped (a fall).
+#: An item no hand holds may shift this much from where it was let go (a physics
+#: engine's settling is under 0.3 mm a step), sideways more only as far as twice what it
+#: dropped (a fall, tipping over).
 UNHELD_SHIFT_M = 0.01
 
 
@@ -483,41 +485,61 @@ def _holds(trace: Trace, checker: TraceChecker):
 
 
 def _unheld(trace: Trace, checker: TraceChecker):
-    """An item no hand holds (before or after a step) moves only with the drawer or door
-    it stands in (measured in that container's inside frame), or falls: it may shift
-    `UNHELD_SHIFT_M`, sideways more only as far as it dropped."""
+    """An item no hand holds stays where the hand let it go (or where it was at the
+    start), in the frame of the drawer it stands in, except by falling: measured from
+    there, not step by step (a creep of 9 mm a state, or moves in no time, add up), it
+    may shift `UNHELD_SHIFT_M`, sideways more only as far as twice what it dropped (an
+    item that falls may tip over), and never rise. An item taken into a hand does not
+    jump into it: from its last state out of the hand to its first in it, at most
+    `UNHELD_SHIFT_M`."""
     states = trace.states
-    kitchen = [None] * len(states)
+    kitchen: dict[tuple, dict[str, np.ndarray]] = {}
 
     def frames(k: int) -> dict[str, np.ndarray]:
-        if kitchen[k] is None:
-            kitchen[k] = checker.kitchen_frames(states[k])
-        return kitchen[k]
+        key = tuple(states[k]["w"])
+        if key not in kitchen:
+            kitchen[key] = checker.kitchen_frames(states[k])
+        return kitchen[key]
 
-    for k in range(len(states) - 1):
-        before, after = states[k], states[k + 1]
-        for name, pose in after["objects"].items():
-            if name in before["held"] or name in after["held"] or name not in before["objects"]:
+    def placed(k: int, name: str, container) -> np.ndarray:
+        """The item's position at state k, in the container's inside frame (or the
+        world's)."""
+        point = np.array(states[k]["objects"][name][:3], dtype=float)
+        if container is None:
+            return point
+        return np.linalg.solve(frames(k)[container.inside_link], [*point, 1.0])[:3]
+
+    anchors: dict[str, tuple[object, np.ndarray]] = {}
+    for k, state in enumerate(states):
+        before = states[k - 1] if k else None
+        for name, pose in state["objects"].items():
+            was_held = before is not None and name in before["held"]
+            if name in state["held"]:
+                anchors.pop(name, None)
+                if before is not None and not was_held and name in before["objects"]:
+                    jump = math.dist(before["objects"][name][:3], pose[:3])
+                    if jump > UNHELD_SHIFT_M:  # (taken: the hand closed on it where it was)
+                        yield Finding("unheld", f"{name} jumped into the hand",
+                                      round(jump * 100, 1), UNHELD_SHIFT_M * 100, "cm",
+                                      state["t"], k + 2)
                 continue
-            a, b = np.array(before["objects"][name][:3]), np.array(pose[:3])
-            if np.max(np.abs(b - a)) <= UNHELD_SHIFT_M:
-                continue
-            if before["w"] != after["w"]:  # (it may ride in a drawer, or stand in the
-                for container in checker.containers.values():  # cupboard): its frame
-                    inside_a = np.linalg.solve(frames(k)[container.inside_link], [*a, 1.0])
-                    if _in_box(inside_a[:3], container):
-                        inside_b = np.linalg.solve(frames(k + 1)[container.inside_link],
-                                                   [*b, 1.0])
-                        a, b = inside_a[:3], inside_b[:3]
-                        break
+            if name not in anchors:  # (where the hand let it go, or where it starts)
+                origin = k - 1 if was_held and name in before["objects"] else k
+                point = np.array(states[origin]["objects"][name][:3], dtype=float)
+                container = next((c for c in checker.containers.values() if _in_box(
+                    np.linalg.solve(frames(origin)[c.inside_link], [*point, 1.0])[:3], c)),
+                    None)
+                anchors[name] = (container, placed(origin, name, container))
+                if origin == k:
+                    continue
+            container, a = anchors[name]
+            b = placed(k, name, container)
             drop = max(0.0, float(a[2] - b[2]))
-            sideways = float(np.hypot(*(b - a)[:2]))
-            rise = float(b[2] - a[2])
-            shift = max(sideways - drop, rise)
+            shift = max(float(np.hypot(*(b - a)[:2])) - 2 * drop, float(b[2] - a[2]))
             if shift > UNHELD_SHIFT_M:
                 yield Finding("unheld", f"{name} moved with no hand holding it",
-                              round(shift * 100, 1), UNHELD_SHIFT_M * 100, "cm", after["t"],
-                              k + 3)
+                              round(shift * 100, 1), UNHELD_SHIFT_M * 100, "cm", state["t"],
+                              k + 2)
 
 
 def _in_box(local: np.ndarray, container, margin: float = 0.02) -> bool:
