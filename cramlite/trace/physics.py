@@ -111,26 +111,12 @@ def physics_findings(trace: Trace, checker: TraceChecker | None = None) -> list[
         if key not in worst or finding.value > worst[key].value:
             worst[key] = finding
 
-    for finding in _grips(trace, checker):
-        note(finding)
-    for finding in _tilts(trace, checker):
-        note(finding)
-    for finding in _base_accelerations(trace):
-        note(finding)
-    for finding in _joint_accelerations(trace):
-        note(finding)
-    for finding in _yaws(trace, checker):
-        note(finding)
-    for finding in _supports(trace, checker):
-        note(finding)
-    for finding in _impossible(trace):
-        note(finding)
-    for finding in _speeds(trace):
-        note(finding)
-    for finding in _holds(trace, checker):
-        note(finding)
-    for finding in _unheld(trace, checker):
-        note(finding)
+    for check in (_grips(trace, checker), _tilts(trace, checker), _base_accelerations(trace),
+                  _joint_accelerations(trace), _yaws(trace, checker), _supports(trace, checker),
+                  _impossible(trace), _speeds(trace), _holds(trace, checker),
+                  _unheld(trace, checker)):
+        for finding in check:
+            note(finding)
     if trace.cut_short:
         last = trace.states[-1]
         note(Finding("cut short", "the trace stops without the state marked \"end\" its "
