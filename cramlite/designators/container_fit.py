@@ -40,14 +40,14 @@ _ANY_YAW = np.radians(np.arange(180.0))
 
 
 def fits_at(ctx: RobotContext, name: str, container: Container, local: Vec3,
-            item_yaw: float, slack: float = SWEEP_TOLERANCE_M) -> bool:
+            item_yaw: float) -> bool:
     """Does item `name`, its bottom centre at `local` (in the inside's frame) and turned
-    to `item_yaw` (world), fit inside `container` (its bounds within `slack` of the
-    walls; no taller than the inside, within the sweep's tolerance)?"""
+    to `item_yaw` (world), fit inside `container` (its bounds within `FOOTPRINT_SLACK_M`
+    of the walls; no taller than the inside, within the sweep's tolerance)?"""
     extents = ctx.scene.items[name].extents
     yaw = 0.0 if _round(ctx, name) else item_yaw - ctx.scene.inside_yaw(container)
     half_x, half_y = turned_halves(extents, yaw)
-    return (container.fits(local, half_x, half_y, 0.0, slack=slack)
+    return (container.fits(local, half_x, half_y, 0.0, slack=FOOTPRINT_SLACK_M)
             and local[2] + extents[2] <= container.inside_max[2] + SWEEP_TOLERANCE_M)
 
 
@@ -67,7 +67,7 @@ def check_fits(ctx: RobotContext, name: str, target: Vec3, spots: Sequence[Vec3]
         period = math.radians(model.yaw_symmetry_deg)
         yaws = [target_yaw + k * period for k in range(max(1, round(2 * math.pi / period)))]
         how = f"turned to yaw {target_yaw:.2f} rad"
-    if any(fits_at(ctx, name, container, local, float(yaw), FOOTPRINT_SLACK_M)
+    if any(fits_at(ctx, name, container, local, float(yaw))
            for local in inside for yaw in yaws):
         return
     ex, ey, ez = model.extents

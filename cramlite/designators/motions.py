@@ -38,7 +38,7 @@ from cramlite.motion.trajectory import (
 )
 from cramlite.scene.gripper import gripper_geometry
 from cramlite.scene.models import pr2_model
-from cramlite.scene.scene import shape_corners, tool_frame
+from cramlite.scene.scene import gap_to_bounds, shapes_bounds, tool_frame
 from cramlite.world.pr2 import ATTACH_REACH_M, HAND_PAYLOAD_KG
 
 BasePose = tuple[float, float, float]
@@ -427,9 +427,5 @@ def _tool_gap_m(ctx: RobotContext, arm: str, obj: str) -> float:
     """The distance from the gripper's tool frame to the object's bounds (its own frame:
     0 inside them)."""
     tool = ctx.scene.link_matrix(tool_frame(arm))[:3, 3]
-    frame = ctx.scene.item_matrix(obj)
-    local = frame[:3, :3].T @ (tool - frame[:3, 3])
-    corners = np.vstack([shape_corners(shape, shape.in_link)
-                         for shape in ctx.scene.items[obj].model.shapes])
-    lo, hi = corners.min(axis=0), corners.max(axis=0)
-    return float(np.linalg.norm(np.maximum(0.0, np.maximum(lo - local, local - hi))))
+    return gap_to_bounds(tool, ctx.scene.item_matrix(obj),
+                         *shapes_bounds(ctx.scene.items[obj].model.shapes))

@@ -454,6 +454,21 @@ def shape_corners(shape: Shape, placement: np.ndarray) -> np.ndarray:
     return local @ placement[:3, :3].T + placement[:3, 3]
 
 
+def shapes_bounds(shapes: Sequence[Shape]) -> tuple[np.ndarray, np.ndarray]:
+    """The bounds (lo, hi) of shapes in the frame they are given in (an item's: its
+    shapes' `in_link`)."""
+    corners = np.vstack([shape_corners(shape, shape.in_link) for shape in shapes])
+    return corners.min(axis=0), corners.max(axis=0)
+
+
+def gap_to_bounds(point: np.ndarray, frame: np.ndarray, lo: np.ndarray,
+                  hi: np.ndarray) -> float:
+    """The distance from a world point to bounds lo..hi given in `frame` (0 inside them):
+    how far a gripper's tool frame is from what it would hold."""
+    local = frame[:3, :3].T @ (np.asarray(point) - frame[:3, 3])
+    return float(np.linalg.norm(np.maximum(0.0, np.maximum(lo - local, local - hi))))
+
+
 #: A box's corners at unit half extents.
 _UNIT_CORNERS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1)
                           for sz in (-1, 1)], dtype=float)

@@ -49,7 +49,7 @@ import numpy as np
 
 from cramlite.motion.base_timing import BaseLimits
 from cramlite.scene.geometry import placed_bounds
-from cramlite.scene.scene import shape_corners
+from cramlite.scene.scene import gap_to_bounds, shapes_bounds
 from cramlite.scene.transforms import quat_yaw
 from cramlite.trace.check import (
     TraceChecker,
@@ -404,8 +404,8 @@ def _speeds(trace: Trace):
     states = trace.states
     if len(states) < 2:
         return
-    t = np.array([s["t"] for s in states], dtype=float)
-    dt = np.diff(t)
+    columns, velocities, names, turning = _joint_columns(trace)
+    t, dt, dq = _joint_steps(trace, columns, turning)
     steps = np.flatnonzero(dt > 1e-9)  # (a step of no time is judged as a jump)
     if not len(steps):
         return
@@ -421,10 +421,8 @@ def _speeds(trace: Trace):
         for k in np.flatnonzero(values > limit * (1 + ACCEL_TOLERANCE) + slack):
             yield Finding("base speed", what, round(float(values[k]), 3), round(limit, 3),
                           unit, float(t[steps[k] + 1]), int(steps[k]) + 3)
-    columns, velocities, names, turning = _joint_columns(trace)
     if not columns:
         return
-    _, _, dq = _joint_steps(trace, columns, turning)
     v = np.abs(dq[steps]) / span[:, None]
     allowed = np.array(velocities) * (1 + ACCEL_TOLERANCE) + slack[:, None]
     for k, j in zip(*np.nonzero(v > allowed), strict=True):
@@ -454,16 +452,11 @@ def _holds(trace: Trace, checker: TraceChecker):
                 continue
             last[name] = key
             if name not in bounds:
-                corners = np.vstack([shape_corners(shape, shape.in_link)
-                                     for shape in model.shapes])
-                bounds[name] = corners.min(axis=0), corners.max(axis=0)
+                bounds[name] = shapes_bounds(model.shapes)
             if robot is None:
                 robot = checker.robot_frames(state)
-            tool = robot[f"{arm[0]}_gripper_tool_frame"][:3, 3]
-            frame = object_frame(state["objects"][name])
-            local = frame[:3, :3].T @ (tool - frame[:3, 3])
-            lo, hi = bounds[name]
-            gap = float(np.linalg.norm(np.maximum(0.0, np.maximum(lo - local, local - hi))))
+            gap = gap_to_bounds(robot[f"{arm[0]}_gripper_tool_frame"][:3, 3],
+                                object_frame(state["objects"][name]), *bounds[name])
             if gap > ATTACH_REACH_M + 1e-3:
                 yield Finding("hold", f"{name} held by the {arm} hand, its bounds away from "
                               "the fingers", round(gap * 100, 1), ATTACH_REACH_M * 100, "cm",
